@@ -1,0 +1,126 @@
+"""The ``rtlab`` command line."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from importlib import resources
+from pathlib import Path
+
+from tracer.image import ImageFormatError, image_format, save_image
+from tracer.render import render_with_stats
+from tracer.scene import Scene, SceneError, load_scene
+
+DEMO_SCENE = "ex25.toml"
+
+
+def demo_scene_path() -> Path:
+    return Path(str(resources.files("tracer") / "scenes" / DEMO_SCENE))
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a number >= 1, got {value}")
+    return value
+
+
+def _add_overrides(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--width", type=_positive_int, help="image width in pixels")
+    p.add_argument("--height", type=_positive_int, help="image height in pixels")
+    p.add_argument("--spp", type=_positive_int, help="samples per pixel")
+    p.add_argument("--seed", type=int, help="random seed for jittered samples")
+    p.add_argument("--max-depth", type=_positive_int, help="levels of the ray tree")
+    p.add_argument("--threads", type=_positive_int, help="render threads (default: all cores)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar, no summary")
+
+
+def _apply_overrides(scene: Scene, args: argparse.Namespace) -> Scene:
+    return scene.with_overrides(
+        width=args.width,
+        height=args.height,
+        spp=args.spp,
+        seed=args.seed,
+        max_depth=args.max_depth,
+    )
+
+
+def _render_to(scene: Scene, outputs: Sequence[Path], args: argparse.Namespace) -> None:
+    for out in outputs:  # refuse a bad suffix before spending time on the render
+        image_format(out)
+    result = render_with_stats(
+        scene, threads=args.threads, progress=None if not args.quiet else False
+    )
+    for out in outputs:
+        save_image(out, result.image)
+    if not args.quiet:
+        rays = result.rays
+        total = sum(rays.values())
+        print(
+            f"{scene.camera.width}x{scene.camera.height}, {scene.render.spp} spp, "
+            f"{result.threads} threads: {result.seconds:.3f} s, {total / 1e6:.2f} M rays "
+            f"({rays['primary']} primary, {rays['secondary']} secondary, {rays['shadow']} shadow)"
+        )
+        for out in outputs:
+            print(f"wrote {out}")
+
+
+def cmd_render(args: argparse.Namespace) -> None:
+    scene = _apply_overrides(load_scene(args.scene), args)
+    _render_to(scene, [Path(args.output)], args)
+
+
+def cmd_demo(args: argparse.Namespace) -> None:
+    scene = _apply_overrides(load_scene(demo_scene_path()), args)
+    out = Path(args.out_dir)
+    _render_to(scene, [out / "ex25-rtlab.png", out / "ex25-rtlab.exr"], args)
+
+
+def cmd_check(args: argparse.Namespace) -> None:
+    scene = load_scene(args.scene)
+    print(
+        f"{args.scene}: ok ({len(scene.objects)} objects, {len(scene.lights)} lights, "
+        f"{len(scene.materials)} materials)"
+    )
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="rtlab", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    p = sub.add_parser("render", help="render a scene file to .exr, .png or .npy")
+    p.add_argument("scene", help="scene file (TOML)")
+    p.add_argument("-o", "--output", required=True, help="output image: .exr, .png or .npy")
+    _add_overrides(p)
+    p.set_defaults(func=cmd_render)
+
+    p = sub.add_parser("demo", help="render the built-in demo scene (the course's Ex 25)")
+    p.add_argument("--out-dir", default="out", help="where the images go (default: out)")
+    _add_overrides(p)
+    p.set_defaults(func=cmd_demo)
+
+    p = sub.add_parser("check", help="validate a scene file without rendering")
+    p.add_argument("scene", help="scene file (TOML)")
+    p.set_defaults(func=cmd_check)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        args.func(args)
+    except (SceneError, ImageFormatError) as exc:
+        print(f"rtlab: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("rtlab: interrupted; no output written", file=sys.stderr)
+        return 130
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,57 @@
+// Slide "Ex 25: Three Ray Traced Spheres" - support classes Vec3 and Color.
+//
+// All geometry is in double precision: the course asks for "all calculations in global
+// coordinates", and global coordinates of a distant camera or a huge sphere need the 53-bit
+// mantissa (see 04_sphere.h). Images leave the core as float32.
+#pragma once
+
+#include <cmath>
+
+namespace rt {
+
+struct Vec3 {
+    double x = 0, y = 0, z = 0;
+
+    Vec3() = default;
+    constexpr Vec3(double x_, double y_, double z_) : x(x_), y(y_), z(z_) {}
+
+    double operator[](int i) const { return i == 0 ? x : (i == 1 ? y : z); }
+    Vec3 operator-() const { return {-x, -y, -z}; }
+    Vec3 operator+(const Vec3 &v) const { return {x + v.x, y + v.y, z + v.z}; }
+    Vec3 operator-(const Vec3 &v) const { return {x - v.x, y - v.y, z - v.z}; }
+    Vec3 operator*(double s) const { return {x * s, y * s, z * s}; }
+    Vec3 operator/(double s) const { return {x / s, y / s, z / s}; }
+};
+
+inline Vec3 operator*(double s, const Vec3 &v) { return v * s; }
+inline double dot(const Vec3 &a, const Vec3 &b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline Vec3 cross(const Vec3 &a, const Vec3 &b) {
+    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+inline double length(const Vec3 &v) { return std::sqrt(dot(v, v)); }
+inline Vec3 normalize(const Vec3 &v) { return v / length(v); }
+inline Vec3 abs(const Vec3 &v) { return {std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)}; }
+
+// Light is "linearly additive" (slide "Specular Reflected Light"): a colour is a triple of
+// intensities that we add and scale; it is kept apart from Vec3 so the two are never mixed up.
+struct Color {
+    double r = 0, g = 0, b = 0;
+
+    Color() = default;
+    constexpr Color(double r_, double g_, double b_) : r(r_), g(g_), b(b_) {}
+
+    Color operator+(const Color &c) const { return {r + c.r, g + c.g, b + c.b}; }
+    Color &operator+=(const Color &c) {
+        r += c.r;
+        g += c.g;
+        b += c.b;
+        return *this;
+    }
+    // Component-wise product: a white light on a red material gives red.
+    Color operator*(const Color &c) const { return {r * c.r, g * c.g, b * c.b}; }
+    Color operator*(double s) const { return {r * s, g * s, b * s}; }
+};
+
+inline Color operator*(double s, const Color &c) { return c * s; }
+
+} // namespace rt

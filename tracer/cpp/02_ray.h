@@ -1,0 +1,59 @@
+// Slide "What is a Ray?": p = o + t d, and the types of rays - primary, secondary, shadow.
+//
+// Also here: where a secondary or shadow ray may start. A hit point computed in floating point
+// lies a little off the true surface, on either side; a ray started there can hit the surface it
+// leaves ("shadow acne"). A fixed epsilon is wrong at some scale (too small for a huge sphere,
+// too large for a tiny one). Instead every hit carries a bound on its own rounding error and the
+// new ray starts just outside that bound, on the side it leaves to: the method of pbrt-v4
+// (Pharr, Jakob, Humphreys, "Physically Based Rendering", 4th ed., sections 6.8.4-6.8.6).
+#pragma once
+
+#include <cfloat>
+#include <cmath>
+#include <limits>
+
+#include "01_vec3.h"
+
+namespace rt {
+
+constexpr double infinity = std::numeric_limits<double>::infinity();
+
+struct Ray {
+    Vec3 o; // origin
+    Vec3 d; // direction: unit length for primary and secondary rays
+    Vec3 at(double t) const { return o + t * d; }
+};
+
+// The open interval (min, max) of ray parameters t that count as a hit.
+struct Interval {
+    double min = 0, max = infinity;
+    bool surrounds(double t) const { return min < t && t < max; }
+};
+
+// gamma(n) = n u / (1 - n u), with u = 2^-53 the unit roundoff of double: the relative error
+// bound of n chained floating-point operations (Higham, "Accuracy and Stability of Numerical
+// Algorithms", section 3.1; pbrt-v4 section 6.8.1).
+constexpr double gamma(int n) {
+    constexpr double u = DBL_EPSILON * 0.5;
+    return (n * u) / (1 - n * u);
+}
+
+// Move a hit point p, whose absolute error is at most p_error per component, along the unit
+// normal N far enough that it lies certainly on the side `toward` points to (pbrt-v4 6.8.6,
+// OffsetRayOrigin). The offset d = |N|.p_error is the largest distance the error box reaches
+// along N; the result is then rounded one ulp further away so the addition cannot fall back.
+inline Vec3 offset_ray_origin(const Vec3 &p, const Vec3 &p_error, const Vec3 &N,
+                              const Vec3 &toward) {
+    double d = dot(abs(N), p_error);
+    Vec3 offset = d * N;
+    if (dot(toward, N) < 0) offset = -offset;
+    Vec3 po = p + offset;
+    auto away = [](double v, double off) {
+        if (off > 0) return std::nextafter(v, infinity);
+        if (off < 0) return std::nextafter(v, -infinity);
+        return v;
+    };
+    return {away(po.x, offset.x), away(po.y, offset.y), away(po.z, offset.z)};
+}
+
+} // namespace rt

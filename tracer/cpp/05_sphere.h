@@ -1,0 +1,112 @@
+// Slide "Intersecting a Sphere": centre, radius, smooth normal, and five cases - none, once
+// (from inside), tangent, internal, twice (Suffern figs. 3.7 and 3.8).
+//
+// Implicit surface (slide "Implicit Surfaces"): (p - c).(p - c) - r^2 = 0. With p = o + t d and
+// f = o - c this is the quadratic  a t^2 + 2 b t + c0 = 0,  a = d.d, b = f.d, c0 = f.f - r^2.
+//
+// The textbook discriminant b^2 - a c0 subtracts two huge, nearly equal numbers when the sphere
+// is small or far away, and loses every digit. Haines, Guenther and Akenine-Moeller, "Precision
+// Improvements for Ray/Sphere Intersection" (Ray Tracing Gems, ch. 7, 2019) compute it instead
+// from the vector l from the centre to the point of the line closest to it:
+//     b^2 - a c0 = a (r^2 - |f - (b/a) d|^2),
+// and take the roots in the stable form q = -(b + sign(b) sqrt(D)), t0 = c0/q, t1 = q/a, so
+// that neither root is the difference of two nearly equal numbers.
+#pragma once
+
+#include <cmath>
+#include <utility>
+
+#include "04_hit.h"
+
+namespace rt {
+
+struct Sphere {
+    Vec3 center;
+    double radius = 1;
+    int object = -1, material = -1;
+};
+
+// The two roots t0 <= t1 of the ray's line with the sphere; real == false when it misses.
+struct SphereRoots {
+    bool real = false;
+    double t0 = 0, t1 = 0;
+};
+
+inline SphereRoots sphere_roots(const Sphere &s, const Ray &ray) {
+    Vec3 f = ray.o - s.center;
+    double a = dot(ray.d, ray.d);
+    double b = dot(f, ray.d);
+    double r2 = s.radius * s.radius;
+    Vec3 l = f - (b / a) * ray.d; // centre -> closest point of the line (Haines eq. 7.5)
+    double D = a * (r2 - dot(l, l));
+    if (D < 0) return {};
+    double q = -(b + std::copysign(std::sqrt(D), b));
+    if (q == 0) return {true, 0, 0}; // the origin is the touching point of a tangent ray
+    double c0 = dot(f, f) - r2;
+    double t0 = c0 / q, t1 = q / a;
+    if (t0 > t1) std::swap(t0, t1);
+    return {true, t0, t1};
+}
+
+// The five cases, for a ray whose parameters t count in `range` (t > 0 for a ray's forward half):
+enum class SphereCase {
+    none,             // the line misses the sphere, or the sphere lies behind the ray
+    once_from_inside, // the origin is inside: the ray leaves through the far side (t0 < 0 < t1)
+    tangent,          // the ray grazes the sphere: one double root (D = 0)
+    internal,         // the ray starts on the surface and runs inside it, as a reflection
+                      // inside a mirror sphere does: the root at its own start (t = 0) is the
+                      // surface it leaves, not a hit; the far side t1 is
+    twice,            // the origin is outside and the ray enters and leaves: the hit is t0
+};
+
+// Which of the five cases the ray meets. Only for teaching and tests: intersect_sphere() below
+// needs no case analysis, it takes the nearest root in range.
+inline SphereCase sphere_case(const Sphere &s, const Ray &ray) {
+    SphereRoots roots = sphere_roots(s, ray);
+    if (!roots.real) return SphereCase::none;
+    Vec3 f = ray.o - s.center;
+    double r2 = s.radius * s.radius;
+    // The origin is "on" the surface when f.f - r^2 is within the rounding error of its terms.
+    bool on_surface = std::fabs(dot(f, f) - r2) <= gamma(8) * (dot(f, f) + r2);
+    if (on_surface) {
+        if (dot(f, ray.d) < 0 && roots.t1 > 0) return SphereCase::internal;
+        if (roots.t0 == roots.t1) return SphereCase::tangent;
+        return SphereCase::none;
+    }
+    if (roots.t1 <= 0) return SphereCase::none;
+    if (roots.t0 == roots.t1) return SphereCase::tangent;
+    if (roots.t0 <= 0) return SphereCase::once_from_inside;
+    return SphereCase::twice;
+}
+
+// The closest root within `range`, with the hit point moved exactly onto the sphere.
+inline bool intersect_sphere(const Sphere &s, const Ray &ray, const Interval &range, Hit &hit) {
+    SphereRoots roots = sphere_roots(s, ray);
+    if (!roots.real) return false;
+    double t = roots.t0;
+    if (!range.surrounds(t)) {
+        t = roots.t1;
+        if (!range.surrounds(t)) return false;
+    }
+    // Refine the hit point by projecting it onto the sphere (pbrt-v4 6.8.5): whatever error t
+    // carries, p is then within a few ulps of the true surface.
+    Vec3 local = ray.at(t) - s.center;
+    local = local * (s.radius / length(local));
+    hit.t = t;
+    hit.p = s.center + local;
+    // Error of the projected point: the scaling costs gamma(5) of |local| (pbrt-v4 eq. 6.39),
+    // the subtraction of and the addition back of the centre one rounding each of |c| + |local|.
+    hit.p_error = gamma(7) * (abs(s.center) + abs(local));
+    hit.N = local / s.radius;
+    hit.object = s.object;
+    hit.material = s.material;
+    return true;
+}
+
+// Shadow rays only need to know whether something lies in range, not what is closest.
+inline bool sphere_blocks(const Sphere &s, const Ray &ray, const Interval &range) {
+    SphereRoots roots = sphere_roots(s, ray);
+    return roots.real && (range.surrounds(roots.t0) || range.surrounds(roots.t1));
+}
+
+} // namespace rt

@@ -1,0 +1,17 @@
+// Slide "Light Reflection": what an object is made of, in the classic model's terms.
+#pragma once
+
+#include "01_vec3.h"
+
+namespace rt {
+
+struct Material {
+    Color color{1, 1, 1};
+    double ambient = 0.1;      // share of the ambient light it returns
+    double diffuse = 0.6;      // Lambert coefficient, times N.L
+    double specular = 0;       // Phong coefficient; the highlight is the light's colour
+    double shininess = 40;     // Phong exponent
+    double reflectivity = 0;   // alpha, the mirror coefficient in the chain
+};
+
+} // namespace rt

@@ -1,0 +1,58 @@
+// Slide "How is it Done?": the scene - objects, lights, the eye - and the two questions a ray
+// asks of it: what is the closest hit (primary and secondary rays), and is anything in the way
+// (shadow rays).
+//
+// As in the course's Ex 25 ("no object abstraction, STL vector<> for lists"), each kind of
+// object has its own list; every object keeps its index into the scene file's [[objects]].
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "03_camera.h"
+#include "05_sphere.h"
+#include "06_plane.h"
+#include "07_material.h"
+#include "08_light.h"
+
+namespace rt {
+
+struct Settings {
+    int max_depth = 5;            // the primary ray is level 1
+    double min_coefficient = 0;   // a level whose chain coefficient is below this is black
+    int spp = 1;                  // samples per pixel
+    uint64_t seed = 0;
+    Color background{0, 0, 0};    // what a ray that hits nothing returns
+    Color ambient_light{1, 1, 1};
+};
+
+struct Scene {
+    Camera camera;
+    Settings settings;
+    std::vector<Material> materials;
+    std::vector<Light> lights;
+    std::vector<Sphere> spheres;
+    std::vector<Plane> planes;
+};
+
+// "Find nearest hit" (slide "How ray tracing works").
+inline Hit closest_hit(const Scene &scene, const Ray &ray) {
+    Hit hit;
+    Interval range{0, infinity};
+    for (const Sphere &s : scene.spheres)
+        if (intersect_sphere(s, ray, range, hit)) range.max = hit.t;
+    for (const Plane &pl : scene.planes)
+        if (intersect_plane(pl, ray, range, hit)) range.max = hit.t;
+    return hit;
+}
+
+// "Objects block light": true as soon as any object lies within the range; no need to sort.
+inline bool any_hit(const Scene &scene, const Ray &ray, const Interval &range) {
+    for (const Sphere &s : scene.spheres)
+        if (sphere_blocks(s, ray, range)) return true;
+    for (const Plane &pl : scene.planes)
+        if (plane_blocks(pl, ray, range)) return true;
+    return false;
+}
+
+} // namespace rt

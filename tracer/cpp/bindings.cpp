@@ -1,0 +1,215 @@
+// tracer._core: the C++ core as a Python extension (nanobind). The Python side (tracer/scene.py)
+// validates the scene file and fills a core Scene through these calls; nothing here parses TOML.
+#include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
+#include <nanobind/stl/array.h>
+#include <nanobind/stl/optional.h>
+#include <nanobind/stl/string.h>
+#include <nanobind/stl/tuple.h>
+
+#include <array>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <tuple>
+
+#include "11_render.h"
+
+namespace nb = nanobind;
+using namespace nb::literals;
+using rt::Color;
+using rt::Vec3;
+
+using Triple = std::array<double, 3>;
+static Vec3 vec(const Triple &a) { return {a[0], a[1], a[2]}; }
+static Color col(const Triple &a) { return {a[0], a[1], a[2]}; }
+static Triple triple(const Vec3 &v) { return {v.x, v.y, v.z}; }
+static Triple triple(const Color &c) { return {c.r, c.g, c.b}; }
+
+static const char *case_name(rt::SphereCase c) {
+    switch (c) {
+    case rt::SphereCase::none: return "none";
+    case rt::SphereCase::once_from_inside: return "once_from_inside";
+    case rt::SphereCase::tangent: return "tangent";
+    case rt::SphereCase::internal: return "internal";
+    case rt::SphereCase::twice: return "twice";
+    }
+    return "?";
+}
+
+static nb::dict hit_dict(const rt::Hit &hit) {
+    nb::dict d;
+    d["t"] = hit.t;
+    d["point"] = triple(hit.p);
+    d["error"] = triple(hit.p_error);
+    d["normal"] = triple(hit.N);
+    d["object"] = hit.object;
+    return d;
+}
+
+static nb::dict counts_dict(const rt::RayCounts &c) {
+    nb::dict d;
+    d["primary"] = c.primary;
+    d["secondary"] = c.secondary;
+    d["shadow"] = c.shadow;
+    return d;
+}
+
+using Image = nb::ndarray<nb::numpy, float, nb::shape<-1, -1, 3>>;
+
+// Render with the GIL released. Every 100 ms the watching thread takes the GIL to check for
+// Ctrl-C and to report progress; an exception from either cancels the render and is re-raised.
+static std::tuple<Image, nb::dict> render(const rt::Scene &scene, int threads,
+                                          nb::object progress) {
+    const int W = scene.camera.width, H = scene.camera.height;
+    float *data = new float[size_t(W) * H * 3]();
+    nb::capsule owner(data, [](void *p) noexcept { delete[] static_cast<float *>(p); });
+    bool failed = false;
+    rt::RenderResult result;
+    {
+        nb::gil_scoped_release release;
+        auto poll = [&](int done, int total) {
+            nb::gil_scoped_acquire acquire;
+            if (PyErr_CheckSignals() != 0) {
+                failed = true; // the KeyboardInterrupt stays set for the re-raise below
+                return false;
+            }
+            if (!progress.is_none()) {
+                try {
+                    progress(done, total);
+                } catch (nb::python_error &e) {
+                    e.restore();
+                    failed = true;
+                    return false;
+                }
+            }
+            return true;
+        };
+        result = rt::render(scene, threads, data, poll);
+    }
+    if (failed) throw nb::python_error();
+    if (!progress.is_none()) progress(1, 1);
+    Image image(data, {size_t(H), size_t(W), size_t(3)}, owner);
+    return {image, counts_dict(result.counts)};
+}
+
+NB_MODULE(_core, m) {
+    m.doc() = "The rtlab ray tracer's C++ core: the lecture's classic algorithm.";
+
+    nb::class_<rt::Scene>(m, "Scene")
+        .def(nb::init<>())
+        .def(
+            "set_camera",
+            [](rt::Scene &s, Triple eye, Triple look_at, Triple up, double fov_y, int width,
+               int height) {
+                s.camera.eye = vec(eye);
+                s.camera.look_at = vec(look_at);
+                s.camera.up = vec(up);
+                s.camera.fov_y = fov_y;
+                s.camera.width = width;
+                s.camera.height = height;
+                s.camera.initialize();
+            },
+            "eye"_a, "look_at"_a, "up"_a, "fov_y"_a, "width"_a, "height"_a)
+        .def(
+            "set_render",
+            [](rt::Scene &s, int max_depth, double min_coefficient, int spp, uint64_t seed,
+               Triple background, Triple ambient_light) {
+                s.settings.max_depth = max_depth;
+                s.settings.min_coefficient = min_coefficient;
+                s.settings.spp = spp;
+                s.settings.seed = seed;
+                s.settings.background = col(background);
+                s.settings.ambient_light = col(ambient_light);
+            },
+            "max_depth"_a, "min_coefficient"_a, "spp"_a, "seed"_a, "background"_a,
+            "ambient_light"_a)
+        .def(
+            "add_material",
+            [](rt::Scene &s, Triple color, double ambient, double diffuse, double specular,
+               double shininess, double reflectivity) {
+                s.materials.push_back(
+                    {col(color), ambient, diffuse, specular, shininess, reflectivity});
+                return int(s.materials.size()) - 1;
+            },
+            "color"_a, "ambient"_a, "diffuse"_a, "specular"_a, "shininess"_a, "reflectivity"_a)
+        .def(
+            "add_point_light",
+            [](rt::Scene &s, Triple position, Triple color) {
+                rt::Light l;
+                l.type = rt::Light::Type::point;
+                l.position = vec(position);
+                l.color = col(color);
+                s.lights.push_back(l);
+            },
+            "position"_a, "color"_a)
+        .def(
+            "add_directional_light",
+            [](rt::Scene &s, Triple direction, Triple color) {
+                rt::Light l;
+                l.type = rt::Light::Type::directional;
+                l.direction = rt::normalize(vec(direction));
+                l.color = col(color);
+                s.lights.push_back(l);
+            },
+            "direction"_a, "color"_a)
+        .def(
+            "add_sphere",
+            [](rt::Scene &s, Triple center, double radius, int object, int material) {
+                s.spheres.push_back({vec(center), radius, object, material});
+            },
+            "center"_a, "radius"_a, "object"_a, "material"_a)
+        .def(
+            "add_plane",
+            [](rt::Scene &s, Triple point, Triple normal, int object, int material) {
+                s.planes.push_back({vec(point), rt::normalize(vec(normal)), object, material});
+            },
+            "point"_a, "normal"_a, "object"_a, "material"_a)
+        .def(
+            "primary_ray",
+            [](const rt::Scene &s, double sx, double sy) {
+                rt::Ray r = s.camera.primary_ray(sx, sy);
+                return std::make_tuple(triple(r.o), triple(r.d));
+            },
+            "sx"_a, "sy"_a, "The primary ray through image point (sx, sy) in pixel units.")
+        .def(
+            "closest_hit",
+            [](const rt::Scene &s, Triple origin, Triple direction) -> std::optional<nb::dict> {
+                rt::Hit hit = rt::closest_hit(s, {vec(origin), vec(direction)});
+                if (!hit.found()) return std::nullopt;
+                return hit_dict(hit);
+            },
+            "origin"_a, "direction"_a)
+        .def(
+            "trace",
+            [](const rt::Scene &s, Triple origin, Triple direction) {
+                rt::RayCounts counts;
+                Color c = rt::trace(s, {vec(origin), rt::normalize(vec(direction))}, counts);
+                return std::make_tuple(triple(c), counts_dict(counts));
+            },
+            "origin"_a, "direction"_a, "The classic colour seen along one ray.");
+
+    m.def("render", &render, "scene"_a, "threads"_a, "progress"_a = nb::none(),
+          "Render to a float32 (height, width, 3) array; also returns the ray counts.");
+
+    m.def(
+        "intersect_sphere",
+        [](Triple center, double radius, Triple origin, Triple direction)
+            -> std::tuple<std::string, std::optional<nb::dict>> {
+            rt::Sphere s{vec(center), radius, 0, 0};
+            rt::Ray ray{vec(origin), vec(direction)};
+            rt::Hit hit;
+            std::optional<nb::dict> found;
+            if (rt::intersect_sphere(s, ray, {0, rt::infinity}, hit)) found = hit_dict(hit);
+            return {case_name(rt::sphere_case(s, ray)), found};
+        },
+        "center"_a, "radius"_a, "origin"_a, "direction"_a,
+        "The sphere case (one of the five) and the closest hit with t > 0, or None.");
+
+    m.def(
+        "offset_ray_origin",
+        [](Triple p, Triple p_error, Triple normal, Triple toward) {
+            return triple(rt::offset_ray_origin(vec(p), vec(p_error), vec(normal), vec(toward)));
+        },
+        "p"_a, "p_error"_a, "normal"_a, "toward"_a);
+}

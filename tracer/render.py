@@ -1,0 +1,105 @@
+"""Rendering a scene model with the C++ core."""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from tracer import _core
+from tracer.scene import DirectionalLight, Plane, PointLight, Scene, Sphere
+
+
+@dataclass(frozen=True)
+class RenderResult:
+    image: npt.NDArray[np.float32]  # linear RGB, shape (height, width, 3)
+    rays: dict[str, int]  # counts of primary, secondary (reflected) and shadow rays
+    seconds: float  # wall time of the render itself
+    threads: int
+
+
+def default_threads() -> int:
+    """All the cores this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def to_core(scene: Scene) -> _core.Scene:
+    """Fill a C++ core scene from the validated model."""
+    core = _core.Scene()
+    c = scene.camera
+    core.set_camera(c.eye, c.look_at, c.up, c.fov_y, c.width, c.height)
+    r = scene.render
+    core.set_render(r.max_depth, r.min_coefficient, r.spp, r.seed, r.background, r.ambient_light)
+    index = {}
+    for name, m in scene.materials.items():
+        index[name] = core.add_material(
+            m.color, m.ambient, m.diffuse, m.specular, m.shininess, m.reflectivity
+        )
+    for light in scene.lights:
+        if isinstance(light, PointLight):
+            core.add_point_light(light.position, light.color)
+        elif isinstance(light, DirectionalLight):
+            core.add_directional_light(light.direction, light.color)
+    for i, obj in enumerate(scene.objects):
+        if isinstance(obj, Sphere):
+            core.add_sphere(obj.center, obj.radius, i, index[obj.material])
+        elif isinstance(obj, Plane):
+            core.add_plane(obj.point, obj.normal, i, index[obj.material])
+    return core
+
+
+ProgressCallback = Callable[[int, int], None]
+
+
+def _progress_bar(total_pixels: int) -> tuple[ProgressCallback, Callable[[], None]]:
+    from tqdm import tqdm
+
+    bar = tqdm(total=100, unit="%", desc="render", leave=False, file=sys.stderr, delay=0.5)
+
+    def update(done: int, total: int) -> None:
+        bar.n = round(100 * done / max(total, 1))
+        bar.refresh()
+
+    return update, bar.close
+
+
+def render_with_stats(
+    scene: Scene, *, threads: int | None = None, progress: bool | None = None
+) -> RenderResult:
+    """Render and report ray counts and time. ``progress=None`` shows a bar on a terminal."""
+    if threads is None:
+        threads = default_threads()
+    if threads < 1:
+        raise ValueError(f"threads must be at least 1, got {threads}")
+    if progress is None:
+        progress = sys.stderr.isatty()
+    core = to_core(scene)
+    callback, close = (
+        _progress_bar(scene.camera.width * scene.camera.height)
+        if progress
+        else (
+            None,
+            lambda: None,
+        )
+    )
+    start = time.perf_counter()
+    try:
+        image, rays = _core.render(core, threads, callback)
+    finally:
+        close()
+    return RenderResult(image, dict(rays), time.perf_counter() - start, threads)
+
+
+def render(
+    scene: Scene, *, threads: int | None = None, progress: bool | None = None
+) -> npt.NDArray[np.float32]:
+    """Render to a float32 linear RGB array of shape (height, width, 3)."""
+    return render_with_stats(scene, threads=threads, progress=progress).image
