@@ -31,7 +31,7 @@ struct Rng {
         z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
         return z ^ (z >> 31);
     }
-    double uniform() { return (next() >> 11) * 0x1.0p-53; } // in [0, 1)
+    double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; } // in [0, 1)
 };
 
 // spp samples in a rows x cols grid of strata (rows the largest divisor of spp not above its
