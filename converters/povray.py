@@ -1,0 +1,128 @@
+"""Scene model -> POV-Ray 3.7 SDL that reproduces the classic model exactly.
+
+What makes POV-Ray compute the slides' model (facts in ../shared/renderers.md, checked by
+tests/test_against_povray.py):
+
+- ``#version 3.7`` and ``assumed_gamma 1.0``: linear colours, no gamma games.
+- The camera: POV-Ray is left-handed and its ``angle`` is the *horizontal* field of view; a
+  right-handed camera with a vertical field of view fy is ``right -x*W/H up y
+  angle 2*atan(W/H*tan(fy/2))``. Rendered with ``-A`` its rays go through pixel centres.
+- Every finish term is written out (POV-Ray's defaults differ): ``ambient`` times the global
+  ``ambient_light``, ``diffuse`` with ``brilliance 1`` (N.L), ``phong``/``phong_size``
+  (untinted, max(R.L, 0)^n), ``specular 0``, ``reflection`` a constant.
+- ``max_trace_level`` = max_depth (it counts the primary ray as level 1 and returns black past
+  it) and ``adc_bailout`` = min_coefficient (the chain's "coef << 1").
+- A point light is a plain ``light_source`` (no fade); a directional light is a ``parallel``
+  light placed far away, since its shadow rays only reach the plane through its location.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+
+from tracer.image import atomic_path
+from tracer.scene import DirectionalLight, Plane, PointLight, Scene, Sphere
+
+
+def _num(x: float) -> str:
+    """A float in full (round-trip) precision: POV-Ray parses doubles."""
+    return repr(float(x))
+
+
+def _vec(v: tuple[float, float, float] | list[float]) -> str:
+    return f"<{_num(v[0])}, {_num(v[1])}, {_num(v[2])}>"
+
+
+def horizontal_angle(fov_y: float, width: int, height: int) -> float:
+    """POV-Ray's ``angle`` (horizontal, degrees) for a vertical field of view."""
+    return math.degrees(2 * math.atan(width / height * math.tan(math.radians(fov_y) / 2)))
+
+
+def _scene_extent(scene: Scene) -> float:
+    """A length bigger than the whole scene, to put parallel lights beyond it."""
+    points = [scene.camera.eye, scene.camera.look_at]
+    size = 1.0
+    for obj in scene.objects:
+        if isinstance(obj, Sphere):
+            points.append(obj.center)
+            size = max(size, obj.radius)
+        elif isinstance(obj, Plane):
+            points.append(obj.point)
+    for light in scene.lights:
+        if isinstance(light, PointLight):
+            points.append(light.position)
+    return size + max(max(abs(c) for c in p) for p in points)
+
+
+def to_povray(scene: Scene) -> str:
+    """The scene as POV-Ray 3.7 SDL text; render with ``povray -D -A``."""
+    cam, ren = scene.camera, scene.render
+    out = [
+        f"// Converted by rtlab from {scene.source}: the classic model, every term explicit.",
+        "#version 3.7;",
+        "global_settings {",
+        "  assumed_gamma 1.0",
+        f"  max_trace_level {ren.max_depth}",
+        f"  adc_bailout {_num(ren.min_coefficient)}",
+        f"  ambient_light rgb {_vec(ren.ambient_light)}",
+        "}",
+        f"background {{ rgb {_vec(ren.background)} }}",
+        "camera {",
+        "  perspective",
+        f"  location {_vec(cam.eye)}",
+        f"  right -x*{_num(cam.width / cam.height)}",
+        "  up y",
+        f"  angle {_num(horizontal_angle(cam.fov_y, cam.width, cam.height))}",
+        f"  sky {_vec(cam.up)}",
+        f"  look_at {_vec(cam.look_at)}",
+        "}",
+    ]
+    far = 1.0e4 * _scene_extent(scene)
+    for light in scene.lights:
+        if isinstance(light, PointLight):
+            out.append(f"light_source {{ {_vec(light.position)} color rgb {_vec(light.color)} }}")
+        elif isinstance(light, DirectionalLight):
+            d = light.direction
+            src = (-d[0] * far, -d[1] * far, -d[2] * far)
+            out.append(
+                f"light_source {{ {_vec(src)} color rgb {_vec(light.color)} "
+                f"parallel point_at <0, 0, 0> }}"
+            )
+    ident = {name: f"M{k}_{_safe(name)}" for k, name in enumerate(scene.materials)}
+    for name, m in scene.materials.items():
+        out += [
+            f"#declare {ident[name]} = texture {{",
+            f"  pigment {{ rgb {_vec(m.color)} }}",
+            "  finish {",
+            f"    ambient {_num(m.ambient)} emission 0",
+            f"    diffuse {_num(m.diffuse)} brilliance 1",
+            f"    phong {_num(m.specular)} phong_size {_num(m.shininess)}",
+            "    specular 0",
+            f"    reflection {{ {_num(m.reflectivity)} }}",
+            "  }",
+            "}",
+        ]
+    for i, obj in enumerate(scene.objects):
+        tex = f"texture {{ {ident[obj.material]} }}"
+        if isinstance(obj, Sphere):
+            out.append(
+                f"sphere {{ {_vec(obj.center)}, {_num(obj.radius)} {tex} }}  // objects[{i}]"
+            )
+        elif isinstance(obj, Plane):
+            n = obj.normal
+            dist = sum(a * b for a, b in zip(n, obj.point, strict=True))
+            out.append(f"plane {{ {_vec(n)}, {_num(dist)} {tex} }}  // objects[{i}]")
+    return "\n".join(out) + "\n"
+
+
+def _safe(name: str) -> str:
+    """A material name cut down to what a POV-Ray identifier may hold."""
+    return "".join(c if c.isascii() and c.isalnum() else "_" for c in name)
+
+
+def write_povray(scene: Scene, path: str | os.PathLike[str]) -> Path:
+    with atomic_path(path) as tmp:
+        tmp.write_text(to_povray(scene))
+    return Path(path)
