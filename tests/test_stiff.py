@@ -179,3 +179,16 @@ def test_no_shadow_acne_far_from_the_origin(scale):
             assert image[j, i] == pytest.approx(want, rel=1e-5, abs=1e-6), (i, j, nl)
             checked += 1
     assert checked > 500
+
+
+def test_offset_rounds_one_ulp_further_away():
+    """offset_ray_origin's last step is nextafter away from the surface, in each component: an
+    error bound far below an ulp of p moves p by exactly one ulp."""
+    p = [1.0, -2.0, 0.0]
+    tiny = [1e-300] * 3
+    got = _core.offset_ray_origin(p, tiny, [1.0, -1.0, 0.0], [1.0, -1.0, 0.0])
+    assert got[0] == math.nextafter(1.0, math.inf)
+    assert got[1] == math.nextafter(-2.0, -math.inf)
+    assert got[2] == 0.0  # no offset along z: unchanged
+    got = _core.offset_ray_origin(p, tiny, [0.0, 0.0, 1.0], [0.0, 0.0, -1.0])
+    assert got[:2] == [1.0, -2.0] and got[2] == math.nextafter(-1e-300, -math.inf)

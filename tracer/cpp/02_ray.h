@@ -10,6 +10,8 @@
 
 #include <cfloat>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 
 #include "01_vec3.h"
@@ -38,6 +40,19 @@ constexpr double gamma(int n) {
     return (n * u) / (1 - n * u);
 }
 
+// The next double after v in the direction of off's sign (v itself when off is 0): what
+// std::nextafter(v, +-infinity) gives for finite v, without a library call on the hot path.
+inline double next_away(double v, double off) {
+    if (off == 0) return v;
+    if (v == 0) return off > 0 ? DBL_TRUE_MIN : -DBL_TRUE_MIN;
+    uint64_t bits;
+    std::memcpy(&bits, &v, sizeof bits);
+    // Moving away from zero adds one to the magnitude's bit pattern; towards zero subtracts one.
+    bits += ((v > 0) == (off > 0)) ? 1 : uint64_t(-1);
+    std::memcpy(&v, &bits, sizeof v);
+    return v;
+}
+
 // Move a hit point p, whose absolute error is at most p_error per component, along the unit
 // normal N far enough that it lies certainly on the side `toward` points to (pbrt-v4 6.8.6,
 // OffsetRayOrigin). The offset d = |N|.p_error is the largest distance the error box reaches
@@ -48,12 +63,7 @@ inline Vec3 offset_ray_origin(const Vec3 &p, const Vec3 &p_error, const Vec3 &N,
     Vec3 offset = d * N;
     if (dot(toward, N) < 0) offset = -offset;
     Vec3 po = p + offset;
-    auto away = [](double v, double off) {
-        if (off > 0) return std::nextafter(v, infinity);
-        if (off < 0) return std::nextafter(v, -infinity);
-        return v;
-    };
-    return {away(po.x, offset.x), away(po.y, offset.y), away(po.z, offset.z)};
+    return {next_away(po.x, offset.x), next_away(po.y, offset.y), next_away(po.z, offset.z)};
 }
 
 } // namespace rt

@@ -79,15 +79,29 @@ inline SphereCase sphere_case(const Sphere &s, const Ray &ray) {
     return SphereCase::twice;
 }
 
-// The closest root within `range`, with the hit point moved exactly onto the sphere.
-inline bool intersect_sphere(const Sphere &s, const Ray &ray, const Interval &range, Hit &hit) {
-    SphereRoots roots = sphere_roots(s, ray);
-    if (!roots.real) return false;
-    double t = roots.t0;
-    if (!range.surrounds(t)) {
-        t = roots.t1;
-        if (!range.surrounds(t)) return false;
-    }
+// The nearest root within `range`, or infinity. (Finding the closest object needs only t;
+// the hit record is filled once, for the winner, by sphere_hit().)
+inline double sphere_t(const Sphere &s, const Ray &ray, const Interval &range) {
+    Vec3 f = ray.o - s.center;
+    double b = dot(f, ray.d);
+    double r2 = s.radius * s.radius;
+    double c0 = dot(f, f) - r2;
+    if (c0 > 0 && b > 0) return infinity; // outside and moving away: both roots negative
+    double a = dot(ray.d, ray.d);
+    Vec3 l = f - (b / a) * ray.d;
+    double D = a * (r2 - dot(l, l));
+    if (D < 0) return infinity;
+    double q = -(b + std::copysign(std::sqrt(D), b));
+    if (q == 0) return infinity; // tangent at the origin itself: t = 0 is out of range
+    double t0 = c0 / q, t1 = q / a;
+    if (t0 > t1) std::swap(t0, t1);
+    if (range.surrounds(t0)) return t0;
+    if (range.surrounds(t1)) return t1;
+    return infinity;
+}
+
+// The hit record at parameter t, with the point moved exactly onto the sphere.
+inline void sphere_hit(const Sphere &s, const Ray &ray, double t, Hit &hit) {
     // Refine the hit point by projecting it onto the sphere (pbrt-v4 6.8.5): whatever error t
     // carries, p is then within a few ulps of the true surface.
     Vec3 local = ray.at(t) - s.center;
@@ -100,13 +114,19 @@ inline bool intersect_sphere(const Sphere &s, const Ray &ray, const Interval &ra
     hit.N = local / s.radius;
     hit.object = s.object;
     hit.material = s.material;
+}
+
+// The closest root within `range`, with its hit record.
+inline bool intersect_sphere(const Sphere &s, const Ray &ray, const Interval &range, Hit &hit) {
+    double t = sphere_t(s, ray, range);
+    if (t == infinity) return false;
+    sphere_hit(s, ray, t, hit);
     return true;
 }
 
 // Shadow rays only need to know whether something lies in range, not what is closest.
 inline bool sphere_blocks(const Sphere &s, const Ray &ray, const Interval &range) {
-    SphereRoots roots = sphere_roots(s, ray);
-    return roots.real && (range.surrounds(roots.t0) || range.surrounds(roots.t1));
+    return sphere_t(s, ray, range) != infinity;
 }
 
 } // namespace rt

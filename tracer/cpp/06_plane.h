@@ -20,9 +20,8 @@ inline double plane_t(const Plane &pl, const Ray &ray) {
     return dot(pl.point - ray.o, pl.normal) / denom;
 }
 
-inline bool intersect_plane(const Plane &pl, const Ray &ray, const Interval &range, Hit &hit) {
-    double t = plane_t(pl, ray);
-    if (!range.surrounds(t)) return false;
+// The hit record at parameter t.
+inline void plane_hit(const Plane &pl, const Ray &ray, double t, Hit &hit) {
     // Refine: project o + t d back onto the plane, removing the error that t carries.
     Vec3 p = ray.at(t);
     p = p - dot(p - pl.point, pl.normal) * pl.normal;
@@ -36,6 +35,12 @@ inline bool intersect_plane(const Plane &pl, const Ray &ray, const Interval &ran
     hit.N = pl.normal;
     hit.object = pl.object;
     hit.material = pl.material;
+}
+
+inline bool intersect_plane(const Plane &pl, const Ray &ray, const Interval &range, Hit &hit) {
+    double t = plane_t(pl, ray);
+    if (!range.surrounds(t)) return false;
+    plane_hit(pl, ray, t, hit);
     return true;
 }
 

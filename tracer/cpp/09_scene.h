@@ -35,14 +35,23 @@ struct Scene {
     std::vector<Plane> planes;
 };
 
-// "Find nearest hit" (slide "How ray tracing works").
+// "Find nearest hit" (slide "How ray tracing works"). The search needs only each object's t;
+// the hit record (point, error bound, normal) is computed once, for the closest.
 inline Hit closest_hit(const Scene &scene, const Ray &ray) {
-    Hit hit;
     Interval range{0, infinity};
-    for (const Sphere &s : scene.spheres)
-        if (intersect_sphere(s, ray, range, hit)) range.max = hit.t;
-    for (const Plane &pl : scene.planes)
-        if (intersect_plane(pl, ray, range, hit)) range.max = hit.t;
+    const Sphere *sphere = nullptr;
+    const Plane *plane = nullptr;
+    for (const Sphere &s : scene.spheres) {
+        double t = sphere_t(s, ray, range);
+        if (t < range.max) range.max = t, sphere = &s;
+    }
+    for (const Plane &pl : scene.planes) {
+        double t = plane_t(pl, ray);
+        if (range.surrounds(t)) range.max = t, plane = &pl, sphere = nullptr;
+    }
+    Hit hit;
+    if (plane) plane_hit(*plane, ray, range.max, hit);
+    else if (sphere) sphere_hit(*sphere, ray, range.max, hit);
     return hit;
 }
 
