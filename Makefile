@@ -42,8 +42,13 @@ $(VENV)/.built: $(VENV)/.installed $(CPP_SOURCES)
 	$(PY) -m pip install -q --no-build-isolation --no-deps -e .
 	@touch $@
 
+# The demo scene with rtlab, POV-Ray and Mitsuba; images, heat maps and a table in out/.
 demo: setup
 	$(VENV)/bin/rtlab demo --out-dir out
+
+# Speed side by side (a benchmark, not a test): every suite, JSON rows in out/bench.json.
+bench: setup
+	$(VENV)/bin/rtlab bench all --json out/bench.json
 
 lint: setup
 	$(VENV)/bin/ruff check .

@@ -89,11 +89,17 @@ def _run(sdl_path: Path, out: Path, args: list[str], threads: int) -> tuple[floa
 
 
 def run_povray(
-    scene: Scene, *, threads: int = 1, workdir: str | Path | None = None, sdl: str | None = None
+    scene: Scene,
+    *,
+    threads: int = 1,
+    workdir: str | Path | None = None,
+    sdl: str | None = None,
+    exr_pass: bool = True,
 ) -> PovrayResult:
     """Render ``scene`` with POV-Ray; the image and its per-pixel precision.
 
     ``sdl`` renders that text instead of the converter's (the tests feed wrong conversions).
+    ``exr_pass=False`` skips the second, EXR render of clamped pixels (for timing one pass).
     """
     cam = scene.camera
     with tempfile.TemporaryDirectory(prefix="rtlab-povray-") as tmp:
@@ -110,7 +116,7 @@ def run_povray(
         image = read_png16(work / "out.png")
         bound = np.full(image.shape, PNG16_BOUND)
         clamped = image >= 1.0
-        if clamped.any():
+        if clamped.any() and exr_pass:
             trace_exr, _ = _run(sdl_path, work / "out.exr", [*size, "+FE"], threads)
             trace += trace_exr
             exr = load_image(work / "out.exr").astype(np.float64)

@@ -77,7 +77,63 @@ def cmd_render(args: argparse.Namespace) -> None:
 def cmd_demo(args: argparse.Namespace) -> None:
     scene = _apply_overrides(load_scene(demo_scene_path()), args)
     out = Path(args.out_dir)
-    _render_to(scene, [out / "ex25-rtlab.png", out / "ex25-rtlab.exr"], args)
+    if args.rtlab_only:
+        _render_to(scene, [out / "ex25-rtlab.png", out / "ex25-rtlab.exr"], args)
+        return
+    from reference.compare import REFERENCES, compare_scene, format_table
+
+    rows = compare_scene(scene, REFERENCES, out_dir=out, json_path=out / "ex25-metrics.json",
+                         threads=args.threads, stem="ex25")  # fmt: skip
+    print(format_table(rows))
+    print(f"images: {out}/ex25-rtlab.png (rtlab), ex25-povray.png, ex25-mitsuba-*.png;")
+    print(f"heat maps: {out}/ex25-diff-*.png; metrics: {out}/ex25-metrics.json")
+
+
+def cmd_convert(args: argparse.Namespace) -> None:
+    scene = _apply_overrides(load_scene(args.scene), args)
+    if args.to == "povray":
+        from converters.povray import write_povray
+
+        path = write_povray(scene, args.output)
+        how = f"render with: povray +I{path} +W{scene.camera.width} +H{scene.camera.height} -D -A"
+    else:
+        from converters.mitsuba import write_mitsuba_xml
+
+        path = write_mitsuba_xml(scene, args.output)
+        how = "load with mi.load_file after 'import converters.mitsuba'"
+    if not args.quiet:
+        print(f"wrote {path} ({how})")
+
+
+def cmd_compare(args: argparse.Namespace) -> None:
+    from reference.compare import REFERENCES, compare_scene, format_table
+
+    against = tuple(a.strip() for a in args.against.split(",") if a.strip())
+    for name in against:
+        if name not in REFERENCES:
+            raise SceneError("--against", "", f"unknown renderer {name!r}; expected {REFERENCES}")
+    scene = _apply_overrides(load_scene(args.scene), args)
+    rows = compare_scene(
+        scene, against, out_dir=args.out_dir, json_path=args.json, threads=args.threads
+    )
+    print(format_table(rows))
+    if args.out_dir:
+        print(f"images and heat maps in {args.out_dir}/")
+    if args.json:
+        print(f"metrics in {args.json}")
+
+
+def cmd_bench(args: argparse.Namespace) -> None:
+    from reference.bench import SUITES, format_ratios, run_suites
+
+    names = list(SUITES) if args.suite == "all" else [args.suite]
+    if names[0] not in SUITES:
+        known = ", ".join(SUITES)
+        raise SceneError("bench", "", f"unknown suite {args.suite!r}; expected all or {known}")
+    rows = run_suites(names, args.json)
+    print(format_ratios(rows))
+    if args.json:
+        print(f"rows in {args.json}")
 
 
 def cmd_check(args: argparse.Namespace) -> None:
@@ -98,10 +154,33 @@ def build_parser() -> argparse.ArgumentParser:
     _add_overrides(p)
     p.set_defaults(func=cmd_render)
 
-    p = sub.add_parser("demo", help="render the built-in demo scene (the course's Ex 25)")
+    p = sub.add_parser(
+        "demo", help="render the built-in demo scene (the course's Ex 25) with all three renderers"
+    )
     p.add_argument("--out-dir", default="out", help="where the images go (default: out)")
+    p.add_argument("--rtlab-only", action="store_true", help="only rtlab's render")
     _add_overrides(p)
     p.set_defaults(func=cmd_demo)
+
+    p = sub.add_parser("convert", help="write the scene for POV-Ray (SDL) or Mitsuba 3 (XML)")
+    p.add_argument("scene", help="scene file (TOML)")
+    p.add_argument("--to", required=True, choices=("povray", "mitsuba"), help="target renderer")
+    p.add_argument("-o", "--output", required=True, help="output file (.pov or .xml)")
+    _add_overrides(p)
+    p.set_defaults(func=cmd_convert)
+
+    p = sub.add_parser("compare", help="render with rtlab and the references; metrics and maps")
+    p.add_argument("scene", help="scene file (TOML)")
+    p.add_argument("--against", default="povray,mitsuba", help="povray, mitsuba or both")
+    p.add_argument("--out-dir", help="write each image and a heat map per pair here")
+    p.add_argument("--json", help="write the metrics here")
+    _add_overrides(p)
+    p.set_defaults(func=cmd_compare)
+
+    p = sub.add_parser("bench", help="speed side by side, as JSON rows and ratios")
+    p.add_argument("suite", help="a suite name (classic) or all")
+    p.add_argument("--json", help="write the rows here")
+    p.set_defaults(func=cmd_bench)
 
     p = sub.add_parser("check", help="validate a scene file without rendering")
     p.add_argument("scene", help="scene file (TOML)")

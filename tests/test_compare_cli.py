@@ -1,0 +1,87 @@
+"""rtlab convert / compare / bench, and the Mitsuba XML loading in a fresh process."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+import tracer
+from reference.bench import format_ratios, suite_classic
+from reference.metrics import MITSUBA_TOLERANCE, agrees
+from tracer.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+SHADOWS = ROOT / "reference" / "scenes" / "shadows.toml"
+
+
+def test_convert_writes_povray_sdl(tmp_path, capsys):
+    out = tmp_path / "s.pov"
+    assert main(["convert", str(SHADOWS), "--to", "povray", "-o", str(out)]) == 0
+    text = out.read_text()
+    assert "#version 3.7;" in text and "max_trace_level 1" in text
+    assert text.count("light_source") == 2 and text.count("sphere {") == 2
+    assert "povray +I" in capsys.readouterr().out
+
+
+def test_mitsuba_xml_loads_in_a_fresh_process_and_renders_the_same(tmp_path):
+    """The XML written by `convert` loads with mi.load_file in any process that imported
+    converters.mitsuba, and renders what the dict conversion renders."""
+    xml = tmp_path / "s.xml"
+    assert main(["convert", str(SHADOWS), "--to", "mitsuba", "-o", str(xml), "--quiet"]) == 0
+    npy = tmp_path / "xml.npy"
+    code = (
+        "import sys, numpy as np, mitsuba as mi, converters.mitsuba as cm\n"
+        "cm.use_variant('llvm_ad_rgb')\n"
+        f"img = mi.render(mi.load_file({str(xml)!r}))\n"
+        f"np.save({str(npy)!r}, np.array(img))\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT, capture_output=True)
+    from reference.mitsuba import run_mitsuba
+
+    scene = tracer.load_scene(SHADOWS)
+    from_dict = run_mitsuba(scene, variant="llvm_ad_rgb", warm=False).image
+    # Not bit for bit: the XML parser builds the camera transform from text in its own float32
+    # steps. The same float32 argument as for any Mitsuba comparison applies.
+    ok, text = agrees(from_dict, np.load(npy)[..., :3], MITSUBA_TOLERANCE)
+    assert ok, text
+
+
+def test_compare_writes_images_heat_maps_and_json(tmp_path, capsys):
+    out = tmp_path / "cmp"
+    js = tmp_path / "cmp" / "metrics.json"
+    args = ["compare", str(SHADOWS), "--against", "povray,mitsuba", "--out-dir", str(out),
+            "--json", str(js), "--width", "80", "--height", "60"]  # fmt: skip
+    assert main(args) == 0
+    table = capsys.readouterr().out
+    assert "povray" in table and "mitsuba-llvm" in table and "SSIM" in table
+    rows = json.loads(js.read_text())
+    assert [r["renderer"] for r in rows] == ["rtlab", "povray", "mitsuba-llvm"]
+    for r in rows[1:]:
+        for key in ("rmse", "max_abs", "psnr", "ssim", "flip", "over_tolerance",
+                    "trace_seconds", "whole_seconds"):  # fmt: skip
+            assert key in r, key
+        assert r["rmse"] < 1e-4 and r["ssim"] > 0.999 and r["over_tolerance"] <= 0.0005
+        assert Path(r["heat_map"]).exists()
+    names = {p.name for p in out.iterdir()}
+    assert {"shadows-rtlab.exr", "shadows-povray.png", "shadows-diff-mitsuba-llvm.png"} <= names
+
+
+def test_compare_rejects_an_unknown_renderer(capsys):
+    assert main(["compare", str(SHADOWS), "--against", "blender"]) == 2
+    assert "unknown renderer 'blender'" in capsys.readouterr().err
+
+
+def test_bench_rows_have_the_contract_fields():
+    rows = suite_classic(repeats=1, threads=(1,), width=64, height=32)
+    assert {r["renderer"] for r in rows} == {"rtlab", "povray", "mitsuba-llvm"}
+    for r in rows:
+        assert {"case", "renderer", "threads", "metric", "value", "unit"} <= set(r)
+        assert r["metric"] == "seconds" and r["unit"] == "s" and r["value"] > 0
+    for r in rows:
+        r["machine"] = "test"
+    text = format_ratios(rows)
+    assert "ex25-64x32, 1 thread" in text and "rtlab is" in text
