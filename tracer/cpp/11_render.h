@@ -34,32 +34,56 @@ struct Rng {
     double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; } // in [0, 1)
 };
 
-// spp samples in a rows x cols grid of strata (rows the largest divisor of spp not above its
-// square root), one jittered sample in each: stratified sampling (Suffern ch. 5). Their
-// average is the box-filtered pixel.
-inline Color render_pixel(const Scene &scene, int i, int j, RayCounts &counts) {
-    const Camera &cam = scene.camera;
+// The image-plane points (in pixel units) where pixel (i, j) is sampled, in order: its centre
+// for spp = 1; otherwise spp samples in a rows x cols grid of strata (rows the largest divisor
+// of spp not above its square root), one jittered sample in each: stratified sampling
+// (Suffern ch. 5). Their average is the box-filtered pixel.
+template <class Sample> inline void for_each_sample(const Scene &scene, int i, int j, Sample f) {
     int spp = scene.settings.spp;
-    if (spp == 1) { // one ray through the pixel centre
-        ++counts.primary;
-        return trace(scene, cam.primary_ray(i + 0.5, j + 0.5), counts);
+    if (spp == 1) {
+        f(i + 0.5, j + 0.5);
+        return;
     }
     int rows = 1;
     for (int r = 1; r * r <= spp; ++r)
         if (spp % r == 0) rows = r;
     int cols = spp / rows;
     Rng rng(Rng(scene.settings.seed ^ 0x5bd1e995u).next() ^
-            (uint64_t(j) * uint64_t(cam.width) + uint64_t(i)));
+            (uint64_t(j) * uint64_t(scene.camera.width) + uint64_t(i)));
     rng.next();
-    Color sum{0, 0, 0};
     for (int k = 0; k < spp; ++k) {
         double sx = i + (k % cols + rng.uniform()) / cols;
         double sy = j + (k / cols + rng.uniform()) / rows;
-        ++counts.primary;
-        sum += trace(scene, cam.primary_ray(sx, sy), counts);
+        f(sx, sy);
     }
-    return sum * (1.0 / spp);
 }
+
+// One pixel, one primary ray per sample, each traced on its own.
+inline Color render_pixel(const Scene &scene, int i, int j, RayCounts &counts) {
+    Color sum{0, 0, 0};
+    for_each_sample(scene, i, j, [&](double sx, double sy) {
+        ++counts.primary;
+        sum += trace(scene, scene.camera.primary_ray(sx, sy), counts);
+    });
+    return scene.settings.spp == 1 ? sum : sum * (1.0 / scene.settings.spp);
+}
+
+inline void store_pixel(float *out, int width, int i, int j, const Color &color) {
+    float *px = out + (size_t(j) * width + i) * 3;
+    px[0] = float(color.r);
+    px[1] = float(color.g);
+    px[2] = float(color.b);
+}
+
+// A tile of pixels [x0, x1) x [y0, y1), one ray at a time (12_packet.h traces W at a time).
+inline void render_tile_rays(const Scene &scene, int x0, int y0, int x1, int y1, float *out,
+                             RayCounts &counts) {
+    for (int j = y0; j < y1; ++j)
+        for (int i = x0; i < x1; ++i)
+            store_pixel(out, scene.camera.width, i, j, render_pixel(scene, i, j, counts));
+}
+
+using TileRenderer = void (*)(const Scene &, int, int, int, int, float *, RayCounts &);
 
 struct RenderResult {
     RayCounts counts;
@@ -71,6 +95,7 @@ struct RenderResult {
 // when poll returns false the workers stop after their current tile.
 inline RenderResult render(const Scene &scene, int threads, float *out,
                            const std::function<bool(int, int)> &poll,
+                           TileRenderer render_tile = render_tile_rays,
                            std::chrono::milliseconds poll_interval = std::chrono::milliseconds(100)) {
     constexpr int tile = 16;
     const int W = scene.camera.width, H = scene.camera.height;
@@ -89,14 +114,7 @@ inline RenderResult render(const Scene &scene, int threads, float *out,
         RayCounts &c = counts[id];
         for (int t; !cancel.load(std::memory_order_relaxed) && (t = next_tile++) < total;) {
             int x0 = (t % tiles_x) * tile, y0 = (t / tiles_x) * tile;
-            for (int j = y0; j < std::min(y0 + tile, H); ++j)
-                for (int i = x0; i < std::min(x0 + tile, W); ++i) {
-                    Color color = render_pixel(scene, i, j, c);
-                    float *px = out + (size_t(j) * W + i) * 3;
-                    px[0] = float(color.r);
-                    px[1] = float(color.g);
-                    px[2] = float(color.b);
-                }
+            render_tile(scene, x0, y0, std::min(x0 + tile, W), std::min(y0 + tile, H), out, c);
             ++tiles_done;
         }
         std::lock_guard<std::mutex> lock(mutex);

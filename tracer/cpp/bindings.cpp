@@ -13,7 +13,7 @@
 #include <string>
 #include <tuple>
 
-#include "11_render.h"
+#include "12_packet.h"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -60,7 +60,7 @@ using Image = nb::ndarray<nb::numpy, float, nb::shape<-1, -1, 3>>;
 // Render with the GIL released. Every 100 ms the watching thread takes the GIL to check for
 // Ctrl-C and to report progress; an exception from either cancels the render and is re-raised.
 static std::tuple<Image, nb::dict> render(const rt::Scene &scene, int threads,
-                                          nb::object progress) {
+                                          nb::object progress, bool packets) {
     const int W = scene.camera.width, H = scene.camera.height;
     float *data = new float[size_t(W) * H * 3]();
     nb::capsule owner(data, [](void *p) noexcept { delete[] static_cast<float *>(p); });
@@ -85,7 +85,8 @@ static std::tuple<Image, nb::dict> render(const rt::Scene &scene, int threads,
             }
             return true;
         };
-        result = rt::render(scene, threads, data, poll);
+        result = rt::render(scene, threads, data, poll,
+                            packets ? rt::render_tile_packets : rt::render_tile_rays);
     }
     if (failed) throw nb::python_error();
     if (!progress.is_none()) progress(1, 1);
@@ -190,7 +191,10 @@ NB_MODULE(_core, m) {
             "origin"_a, "direction"_a, "The classic colour seen along one ray.");
 
     m.def("render", &render, "scene"_a, "threads"_a, "progress"_a = nb::none(),
-          "Render to a float32 (height, width, 3) array; also returns the ray counts.");
+          "packets"_a = true,
+          "Render to a float32 (height, width, 3) array; also returns the ray counts. "
+          "packets=False traces one ray at a time (10_classic.h) instead of W at a time "
+          "(12_packet.h); the images are the same.");
 
     m.def(
         "intersect_sphere",

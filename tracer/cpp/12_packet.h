@@ -1,0 +1,351 @@
+// Slide "Efficiency and Complexity": "Efficiency is a HUGE deal". The same classic algorithm as
+// 10_classic.h, traced for a packet of W rays at once, so that each arithmetic step runs on all
+// W rays in one SIMD instruction (GCC/Clang vector extensions; AVX-512 holds 8 doubles).
+//
+// This file adds speed, not behaviour: every step below is the step of 05_sphere.h, 06_plane.h,
+// 09_scene.h and 10_classic.h with the same operations in the same order, so each lane computes
+// bit for bit what the one-ray code computes (IEEE-754 add, mul, div and sqrt are correctly
+// rounded in vector units too, and the build forbids fused multiply-add contraction).
+// tests/test_packet.py renders every canonical scene both ways and requires equal images.
+// Where lanes disagree (one hits a sphere, the next a plane), masks choose per lane; a lane whose
+// ray has finished is masked off until the whole packet is done.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <vector>
+
+#include "11_render.h"
+
+namespace rt {
+
+constexpr int W = 8; // rays per packet
+
+typedef double Lanes __attribute__((vector_size(W * sizeof(double))));
+typedef int64_t Mask __attribute__((vector_size(W * sizeof(int64_t)))); // lane true: all ones
+
+inline Lanes splat(double v) { return Lanes{} + v; }
+inline Mask mask_all(bool v) { return Mask{} + (v ? -1 : 0); }
+inline bool any(Mask m) {
+    for (int k = 0; k < W; ++k)
+        if (m[k]) return true;
+    return false;
+}
+inline Lanes select(Mask m, Lanes a, Lanes b) { return m ? a : b; }
+inline Lanes sqrt(Lanes x) {
+    Lanes r;
+    for (int k = 0; k < W; ++k) r[k] = std::sqrt(x[k]); // one vsqrtpd (built -fno-math-errno)
+    return r;
+}
+inline Lanes fabs(Lanes x) {
+    Mask bits;
+    std::memcpy(&bits, &x, sizeof x);
+    bits &= Mask{} + INT64_MAX; // clear the sign bit
+    std::memcpy(&x, &bits, sizeof x);
+    return x;
+}
+inline Lanes copysign(Lanes magnitude, Lanes sign) {
+    Mask m, s;
+    std::memcpy(&m, &magnitude, sizeof m);
+    std::memcpy(&s, &sign, sizeof s);
+    const Mask sign_bit = Mask{} + INT64_MIN;
+    m = (m & ~sign_bit) | (s & sign_bit);
+    std::memcpy(&magnitude, &m, sizeof m);
+    return magnitude;
+}
+
+struct Vec3L {
+    Lanes x, y, z;
+    Vec3L operator-() const { return {-x, -y, -z}; }
+    Vec3L operator+(const Vec3L &v) const { return {x + v.x, y + v.y, z + v.z}; }
+    Vec3L operator-(const Vec3L &v) const { return {x - v.x, y - v.y, z - v.z}; }
+    Vec3L operator*(Lanes s) const { return {x * s, y * s, z * s}; }
+    Vec3L operator/(Lanes s) const { return {x / s, y / s, z / s}; }
+};
+inline Vec3L splat(const Vec3 &v) { return {splat(v.x), splat(v.y), splat(v.z)}; }
+inline Lanes dot(const Vec3L &a, const Vec3L &b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline Vec3L normalize(const Vec3L &v) { return v / sqrt(dot(v, v)); }
+inline Vec3L abs(const Vec3L &v) { return {fabs(v.x), fabs(v.y), fabs(v.z)}; }
+inline Vec3L select(Mask m, const Vec3L &a, const Vec3L &b) {
+    return {select(m, a.x, b.x), select(m, a.y, b.y), select(m, a.z, b.z)};
+}
+
+struct ColorL {
+    Lanes r, g, b;
+};
+inline ColorL operator*(const ColorL &c, Lanes s) { return {c.r * s, c.g * s, c.b * s}; }
+inline ColorL operator*(const ColorL &a, const ColorL &c) { return {a.r * c.r, a.g * c.g, a.b * c.b}; }
+inline ColorL splat(const Color &c) { return {splat(c.r), splat(c.g), splat(c.b)}; }
+// color += m ? add : 0, as `color += add` only in the lanes of m.
+inline void add_where(Mask m, ColorL &color, const ColorL &add) {
+    color.r = select(m, color.r + add.r, color.r);
+    color.g = select(m, color.g + add.g, color.g);
+    color.b = select(m, color.b + add.b, color.b);
+}
+
+struct RayL {
+    Vec3L o, d;
+};
+
+// 05_sphere.h sphere_t(), per lane: the nearest root in (0, max), or infinity.
+inline Lanes sphere_t(const Sphere &s, const RayL &ray, Lanes max) {
+    const Lanes inf = splat(infinity);
+    Vec3L f = ray.o - splat(s.center);
+    Lanes b = dot(f, ray.d);
+    double r2 = s.radius * s.radius;
+    Lanes c0 = dot(f, f) - r2;
+    Mask away = (c0 > 0) & (b > 0);
+    Lanes a = dot(ray.d, ray.d);
+    Vec3L l = f - ray.d * (b / a);
+    Lanes D = a * (r2 - dot(l, l));
+    Lanes q = -(b + copysign(sqrt(D), b));
+    Lanes t0 = c0 / q, t1 = q / a;
+    Mask swap = t0 > t1;
+    Lanes lo = select(swap, t1, t0), hi = select(swap, t0, t1);
+    Lanes t = select((lo > 0) & (lo < max), lo, select((hi > 0) & (hi < max), hi, inf));
+    return select(away | (D < 0) | (q == 0), inf, t);
+}
+
+// 06_plane.h plane_t(), per lane.
+inline Lanes plane_t(const Plane &pl, const RayL &ray) {
+    Vec3L n = splat(pl.normal);
+    Lanes denom = dot(ray.d, n);
+    Lanes t = dot(splat(pl.point) - ray.o, n) / denom;
+    return select(denom == 0, splat(infinity), t);
+}
+
+// 09_scene.h closest_hit(): per lane the closest t and which object (kind 0 sphere, 1 plane).
+struct ClosestL {
+    Lanes t;
+    int64_t kind[W], index[W];
+};
+
+inline ClosestL closest_hit(const Scene &scene, const RayL &ray, Mask active) {
+    ClosestL c;
+    c.t = splat(infinity);
+    for (int k = 0; k < W; ++k) c.kind[k] = c.index[k] = -1;
+    for (size_t i = 0; i < scene.spheres.size(); ++i) {
+        Lanes t = sphere_t(scene.spheres[i], ray, c.t);
+        Mask closer = active & (t < c.t);
+        if (!any(closer)) continue;
+        c.t = select(closer, t, c.t);
+        for (int k = 0; k < W; ++k)
+            if (closer[k]) c.kind[k] = 0, c.index[k] = int64_t(i);
+    }
+    for (size_t i = 0; i < scene.planes.size(); ++i) {
+        Lanes t = plane_t(scene.planes[i], ray);
+        Mask closer = active & (t > 0) & (t < c.t);
+        if (!any(closer)) continue;
+        c.t = select(closer, t, c.t);
+        for (int k = 0; k < W; ++k)
+            if (closer[k]) c.kind[k] = 1, c.index[k] = int64_t(i);
+    }
+    return c;
+}
+
+// 09_scene.h any_hit(), per lane, for the lanes of `active`.
+inline Mask any_hit(const Scene &scene, const RayL &ray, Lanes max, Mask active) {
+    Mask blocked = mask_all(false);
+    for (const Sphere &s : scene.spheres) {
+        blocked |= active & (sphere_t(s, ray, max) != infinity);
+        if (!any(active & ~blocked)) return blocked;
+    }
+    for (const Plane &pl : scene.planes) {
+        Lanes t = plane_t(pl, ray);
+        blocked |= active & (t > 0) & (t < max);
+        if (!any(active & ~blocked)) return blocked;
+    }
+    return blocked;
+}
+
+// 02_ray.h next_away() and offset_ray_origin(), per lane.
+inline Lanes next_away(Lanes v, Lanes off) {
+    Mask bits;
+    std::memcpy(&bits, &v, sizeof v);
+    Mask outward = (v > 0) == (off > 0);
+    bits += outward ? Mask{} + 1 : Mask{} - 1;
+    Lanes moved;
+    std::memcpy(&moved, &bits, sizeof moved);
+    Lanes tiny = select(off > 0, splat(DBL_TRUE_MIN), splat(-DBL_TRUE_MIN));
+    return select(off == 0, v, select(v == 0, tiny, moved));
+}
+
+inline Vec3L offset_ray_origin(const Vec3L &p, const Vec3L &p_error, const Vec3L &N,
+                               const Vec3L &toward) {
+    Lanes d = dot(abs(N), p_error);
+    Vec3L offset = N * d;
+    offset = select(dot(toward, N) < 0, -offset, offset);
+    Vec3L po = p + offset;
+    return {next_away(po.x, offset.x), next_away(po.y, offset.y), next_away(po.z, offset.z)};
+}
+
+// The hit record of 05_sphere.h sphere_hit() and 06_plane.h plane_hit(), per lane.
+struct HitL {
+    Vec3L p, p_error, N;
+    int64_t material[W];
+};
+
+inline HitL hit_record(const Scene &scene, const RayL &ray, const ClosestL &c, Mask active) {
+    // Gather each lane's object: sphere centre and radius, or plane point and normal.
+    Vec3L centre = {}, normal = {};
+    Lanes radius = splat(1.0);
+    Mask is_sphere = mask_all(false);
+    HitL h;
+    for (int k = 0; k < W; ++k) {
+        h.material[k] = 0;
+        if (!active[k]) continue;
+        if (c.kind[k] == 0) {
+            const Sphere &s = scene.spheres[size_t(c.index[k])];
+            centre.x[k] = s.center.x, centre.y[k] = s.center.y, centre.z[k] = s.center.z;
+            radius[k] = s.radius;
+            is_sphere[k] = -1;
+            h.material[k] = s.material;
+        } else {
+            const Plane &pl = scene.planes[size_t(c.index[k])];
+            centre.x[k] = pl.point.x, centre.y[k] = pl.point.y, centre.z[k] = pl.point.z;
+            normal.x[k] = pl.normal.x, normal.y[k] = pl.normal.y, normal.z[k] = pl.normal.z;
+            h.material[k] = pl.material;
+        }
+    }
+    Vec3L at = ray.o + ray.d * c.t;
+    // Sphere: project onto the sphere.
+    Vec3L local = at - centre;
+    local = local * (radius / sqrt(dot(local, local)));
+    Vec3L ps = centre + local;
+    Vec3L es = (abs(centre) + abs(local)) * splat(gamma(7));
+    // Plane: project back onto the plane.
+    Vec3L pp = at - normal * dot(at - centre, normal);
+    Lanes e = (fabs(pp.x) + fabs(pp.y) + fabs(pp.z) + fabs(centre.x) + fabs(centre.y) +
+               fabs(centre.z)) *
+              gamma(8);
+    h.p = select(is_sphere, ps, pp);
+    h.p_error = select(is_sphere, es, Vec3L{e, e, e});
+    h.N = select(is_sphere, local / radius, normal);
+    return h;
+}
+
+// One turn of the loop of 10_classic.h trace(), for the rays of `active`: find the closest hit,
+// add this level's light (or the background) times coef to `color`, then follow the mirror:
+// coef *= reflectivity and the ray becomes the secondary ray. Returns the lanes that go on.
+inline Mask trace_level(const Scene &scene, RayL &ray, Mask active, Lanes &coef, ColorL &color,
+                        RayCounts &counts) {
+    const Settings &s = scene.settings;
+    ClosestL closest = closest_hit(scene, ray, active);
+    Mask found = active & (closest.t != infinity);
+    add_where(active & ~found, color, splat(s.background) * coef);
+    active = found;
+    if (!any(active)) return active;
+    HitL hit = hit_record(scene, ray, closest, active);
+
+    // The lane's material, gathered.
+    ColorL m_color;
+    Lanes ambient, diffuse, specular, shininess, reflectivity;
+    for (int k = 0; k < W; ++k) {
+        const Material &m = scene.materials[size_t(hit.material[k])];
+        m_color.r[k] = m.color.r, m_color.g[k] = m.color.g, m_color.b[k] = m.color.b;
+        ambient[k] = m.ambient, diffuse[k] = m.diffuse, specular[k] = m.specular;
+        shininess[k] = m.shininess, reflectivity[k] = m.reflectivity;
+    }
+    Vec3L N = select(dot(hit.N, ray.d) > 0, -hit.N, hit.N);
+    Vec3L R = ray.d - N * (2 * dot(ray.d, N));
+
+    // local_color()
+    ColorL local = m_color * (splat(s.ambient_light) * ambient);
+    Mask shaded = active & ~((diffuse == 0) & (specular == 0));
+    for (const Light &light : scene.lights) {
+        if (!any(shaded)) break;
+        Vec3L L;
+        if (light.type == Light::Type::directional) L = splat(-light.direction);
+        else L = normalize(splat(light.position) - hit.p);
+        Lanes NL = dot(N, L);
+        Mask lit = shaded & (NL > 0);
+        if (!any(lit)) continue;
+        for (int k = 0; k < W; ++k) counts.shadow += lit[k] != 0;
+        RayL shadow;
+        shadow.o = offset_ray_origin(hit.p, hit.p_error, N, L);
+        shadow.d = light.type == Light::Type::directional ? L : splat(light.position) - shadow.o;
+        double max_t = light.type == Light::Type::directional ? infinity : 1.0;
+        lit &= ~any_hit(scene, shadow, splat(max_t), lit);
+        if (!any(lit)) continue;
+        const ColorL lc = splat(light.color);
+        add_where(lit, local, (m_color * lc) * (diffuse * NL));
+        Mask highlight = lit & (specular != 0);
+        if (any(highlight)) {
+            Lanes cos_alpha = dot(R, L), phong = splat(0.0);
+            for (int k = 0; k < W; ++k) // one pow per lane, as phong_term() computes it
+                if (highlight[k] && cos_alpha[k] > 0)
+                    phong[k] = std::pow(cos_alpha[k], shininess[k]);
+            add_where(highlight, local, lc * (specular * phong));
+        }
+    }
+    add_where(active, color, local * coef);
+    active &= reflectivity != 0;
+    coef *= reflectivity;
+    ray.o = offset_ray_origin(hit.p, hit.p_error, N, R);
+    ray.d = R;
+    return active;
+}
+
+} // namespace rt
+
+namespace rt {
+
+// 10_classic.h trace() for a packet: the colours of the rays of `active`. (Packing the rays
+// still going into full packets at each level, as a wavefront, was tried: the gathering and
+// scattering cost more than the idle lanes it saves on these scenes.)
+inline ColorL trace(const Scene &scene, RayL ray, Mask active, RayCounts &counts) {
+    const Settings &s = scene.settings;
+    ColorL color{splat(0), splat(0), splat(0)};
+    Lanes coef = splat(1.0);
+    for (int level = 1; level <= s.max_depth; ++level) { // past the last level: black
+        active &= ~(coef < s.min_coefficient);            // "coef << 1": black
+        if (!any(active)) break;
+        if (level > 1)
+            for (int k = 0; k < W; ++k) counts.secondary += active[k] != 0;
+        active = trace_level(scene, ray, active, coef, color, counts);
+    }
+    return color;
+}
+
+// A tile of pixels, traced W rays at a time: the rays of 11_render.h for_each_sample(), in the
+// same order, so each pixel's sum adds the same colours in the same order.
+inline void render_tile_packets(const Scene &scene, int x0, int y0, int x1, int y1, float *out,
+                                RayCounts &counts) {
+    const Camera &cam = scene.camera;
+    const int tile_w = x1 - x0;
+    std::vector<Color> sums(size_t(tile_w) * size_t(y1 - y0));
+    RayL packet;
+    int pixel[W], n = 0;
+    auto flush = [&] {
+        Mask active = mask_all(false);
+        for (int k = 0; k < W; ++k) {
+            active[k] = k < n ? -1 : 0;
+            if (k >= n) // idle lanes: any harmless ray, masked off
+                packet.o.x[k] = packet.o.y[k] = packet.o.z[k] = 0,
+                packet.d.x[k] = packet.d.y[k] = 0, packet.d.z[k] = 1;
+        }
+        ColorL c = trace(scene, packet, active, counts);
+        for (int k = 0; k < n; ++k) sums[size_t(pixel[k])] += Color{c.r[k], c.g[k], c.b[k]};
+        n = 0;
+    };
+    for (int j = y0; j < y1; ++j)
+        for (int i = x0; i < x1; ++i)
+            for_each_sample(scene, i, j, [&](double sx, double sy) {
+                Ray r = cam.primary_ray(sx, sy);
+                ++counts.primary;
+                packet.o.x[n] = r.o.x, packet.o.y[n] = r.o.y, packet.o.z[n] = r.o.z;
+                packet.d.x[n] = r.d.x, packet.d.y[n] = r.d.y, packet.d.z[n] = r.d.z;
+                pixel[n] = (j - y0) * tile_w + (i - x0);
+                if (++n == W) flush();
+            });
+    if (n > 0) flush();
+    for (int j = y0; j < y1; ++j)
+        for (int i = x0; i < x1; ++i) {
+            Color c = sums[size_t((j - y0) * tile_w + (i - x0))];
+            if (scene.settings.spp > 1) c = c * (1.0 / scene.settings.spp);
+            store_pixel(out, cam.width, i, j, c);
+        }
+}
+
+} // namespace rt
