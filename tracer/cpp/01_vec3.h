@@ -20,7 +20,12 @@ struct Vec3 {
     Vec3 operator+(const Vec3 &v) const { return {x + v.x, y + v.y, z + v.z}; }
     Vec3 operator-(const Vec3 &v) const { return {x - v.x, y - v.y, z - v.z}; }
     Vec3 operator*(double s) const { return {x * s, y * s, z * s}; }
-    Vec3 operator/(double s) const { return {x / s, y / s, z / s}; }
+    // One division and three multiplications (a division costs several multiplications); the
+    // result may differ from x / s by an ulp, which nothing here depends on.
+    Vec3 operator/(double s) const {
+        double inv = 1 / s;
+        return {x * inv, y * inv, z * inv};
+    }
 };
 
 inline Vec3 operator*(double s, const Vec3 &v) { return v * s; }

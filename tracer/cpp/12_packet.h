@@ -61,7 +61,10 @@ struct Vec3L {
     Vec3L operator+(const Vec3L &v) const { return {x + v.x, y + v.y, z + v.z}; }
     Vec3L operator-(const Vec3L &v) const { return {x - v.x, y - v.y, z - v.z}; }
     Vec3L operator*(Lanes s) const { return {x * s, y * s, z * s}; }
-    Vec3L operator/(Lanes s) const { return {x / s, y / s, z / s}; }
+    Vec3L operator/(Lanes s) const { // as Vec3::operator/
+        Lanes inv = 1 / s;
+        return {x * inv, y * inv, z * inv};
+    }
 };
 inline Vec3L splat(const Vec3 &v) { return {splat(v.x), splat(v.y), splat(v.z)}; }
 inline Lanes dot(const Vec3L &a, const Vec3L &b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
@@ -88,17 +91,21 @@ struct RayL {
     Vec3L o, d;
 };
 
-// 05_sphere.h sphere_t(), per lane: the nearest root in (0, max), or infinity.
-inline Lanes sphere_t(const Sphere &s, const RayL &ray, Lanes max) {
+// 05_sphere.h sphere_t(), per lane: the nearest root in (0, max), or infinity. Most packets
+// miss most spheres: when no live lane has a real root ahead, the roots' two divisions and the
+// square root are skipped (they cost more than all the rest).
+inline Lanes sphere_t(const Sphere &s, const RayL &ray, Lanes max, Mask active) {
     const Lanes inf = splat(infinity);
     Vec3L f = ray.o - splat(s.center);
     Lanes b = dot(f, ray.d);
     double r2 = s.radius * s.radius;
     Lanes c0 = dot(f, f) - r2;
     Mask away = (c0 > 0) & (b > 0);
+    if (!any(active & ~away)) return inf;
     Lanes a = dot(ray.d, ray.d);
     Vec3L l = f - ray.d * (b / a);
     Lanes D = a * (r2 - dot(l, l));
+    if (!any(active & ~away & (D >= 0))) return inf;
     Lanes q = -(b + copysign(sqrt(D), b));
     Lanes t0 = c0 / q, t1 = q / a;
     Mask swap = t0 > t1;
@@ -126,7 +133,7 @@ inline ClosestL closest_hit(const Scene &scene, const RayL &ray, Mask active) {
     c.t = splat(infinity);
     for (int k = 0; k < W; ++k) c.kind[k] = c.index[k] = -1;
     for (size_t i = 0; i < scene.spheres.size(); ++i) {
-        Lanes t = sphere_t(scene.spheres[i], ray, c.t);
+        Lanes t = sphere_t(scene.spheres[i], ray, c.t, active);
         Mask closer = active & (t < c.t);
         if (!any(closer)) continue;
         c.t = select(closer, t, c.t);
@@ -148,7 +155,7 @@ inline ClosestL closest_hit(const Scene &scene, const RayL &ray, Mask active) {
 inline Mask any_hit(const Scene &scene, const RayL &ray, Lanes max, Mask active) {
     Mask blocked = mask_all(false);
     for (const Sphere &s : scene.spheres) {
-        blocked |= active & (sphere_t(s, ray, max) != infinity);
+        blocked |= active & (sphere_t(s, ray, max, active & ~blocked) != infinity);
         if (!any(active & ~blocked)) return blocked;
     }
     for (const Plane &pl : scene.planes) {
@@ -209,19 +216,26 @@ inline HitL hit_record(const Scene &scene, const RayL &ray, const ClosestL &c, M
         }
     }
     Vec3L at = ray.o + ray.d * c.t;
-    // Sphere: project onto the sphere.
-    Vec3L local = at - centre;
-    local = local * (radius / sqrt(dot(local, local)));
-    Vec3L ps = centre + local;
-    Vec3L es = (abs(centre) + abs(local)) * splat(gamma(7));
-    // Plane: project back onto the plane.
-    Vec3L pp = at - normal * dot(at - centre, normal);
-    Lanes e = (fabs(pp.x) + fabs(pp.y) + fabs(pp.z) + fabs(centre.x) + fabs(centre.y) +
-               fabs(centre.z)) *
-              gamma(8);
-    h.p = select(is_sphere, ps, pp);
-    h.p_error = select(is_sphere, es, Vec3L{e, e, e});
-    h.N = select(is_sphere, local / radius, normal);
+    const bool spheres = any(active & is_sphere), planes = any(active & ~is_sphere);
+    if (spheres) { // project onto the sphere
+        Vec3L local = at - centre;
+        local = local * (radius / sqrt(dot(local, local)));
+        h.p = centre + local;
+        h.p_error = (abs(centre) + abs(local)) * splat(gamma(7));
+        h.N = local / radius;
+    }
+    if (planes) { // project back onto the plane
+        Vec3L pp = at - normal * dot(at - centre, normal);
+        Lanes e = (fabs(pp.x) + fabs(pp.y) + fabs(pp.z) + fabs(centre.x) + fabs(centre.y) +
+                   fabs(centre.z)) *
+                  gamma(8);
+        if (!spheres) h.p = pp, h.p_error = {e, e, e}, h.N = normal;
+        else {
+            h.p = select(is_sphere, h.p, pp);
+            h.p_error = select(is_sphere, h.p_error, Vec3L{e, e, e});
+            h.N = select(is_sphere, h.N, normal);
+        }
+    }
     return h;
 }
 
@@ -238,14 +252,26 @@ inline Mask trace_level(const Scene &scene, RayL &ray, Mask active, Lanes &coef,
     if (!any(active)) return active;
     HitL hit = hit_record(scene, ray, closest, active);
 
-    // The lane's material, gathered.
+    // The lane's material, gathered (or splat, when all live lanes share one).
     ColorL m_color;
     Lanes ambient, diffuse, specular, shininess, reflectivity;
-    for (int k = 0; k < W; ++k) {
-        const Material &m = scene.materials[size_t(hit.material[k])];
-        m_color.r[k] = m.color.r, m_color.g[k] = m.color.g, m_color.b[k] = m.color.b;
-        ambient[k] = m.ambient, diffuse[k] = m.diffuse, specular[k] = m.specular;
-        shininess[k] = m.shininess, reflectivity[k] = m.reflectivity;
+    int first = 0;
+    while (!active[first]) ++first;
+    bool shared = true;
+    for (int k = first + 1; k < W; ++k)
+        shared &= !active[k] || hit.material[k] == hit.material[first];
+    if (shared) {
+        const Material &m = scene.materials[size_t(hit.material[first])];
+        m_color = splat(m.color);
+        ambient = splat(m.ambient), diffuse = splat(m.diffuse), specular = splat(m.specular);
+        shininess = splat(m.shininess), reflectivity = splat(m.reflectivity);
+    } else {
+        for (int k = 0; k < W; ++k) {
+            const Material &m = scene.materials[size_t(hit.material[k])];
+            m_color.r[k] = m.color.r, m_color.g[k] = m.color.g, m_color.b[k] = m.color.b;
+            ambient[k] = m.ambient, diffuse[k] = m.diffuse, specular[k] = m.specular;
+            shininess[k] = m.shininess, reflectivity[k] = m.reflectivity;
+        }
     }
     Vec3L N = select(dot(hit.N, ray.d) > 0, -hit.N, hit.N);
     Vec3L R = ray.d - N * (2 * dot(ray.d, N));
@@ -308,11 +334,40 @@ inline ColorL trace(const Scene &scene, RayL ray, Mask active, RayCounts &counts
     return color;
 }
 
+// 03_camera.h primary_ray() through the centres of pixels i0 .. i0 + W - 1 of row j.
+inline RayL primary_rays(const Camera &cam, int i0, int j) {
+    Lanes sx;
+    for (int k = 0; k < W; ++k) sx[k] = (i0 + k) + 0.5;
+    Lanes x = sx / double(cam.width) - 0.5;
+    double y = 0.5 - (j + 0.5) / cam.height;
+    Vec3L d = splat(cam.forward) + splat(cam.right) * (x * cam.plane_width) +
+              splat(cam.true_up * (y * cam.plane_height));
+    return {splat(cam.eye), normalize(d)};
+}
+
+inline void store_pixels(float *out, int width, int i0, int j, int n, const ColorL &c) {
+    float *px = out + (size_t(j) * width + i0) * 3;
+    for (int k = 0; k < n; ++k, px += 3)
+        px[0] = float(c.r[k]), px[1] = float(c.g[k]), px[2] = float(c.b[k]);
+}
+
 // A tile of pixels, traced W rays at a time: the rays of 11_render.h for_each_sample(), in the
 // same order, so each pixel's sum adds the same colours in the same order.
 inline void render_tile_packets(const Scene &scene, int x0, int y0, int x1, int y1, float *out,
                                 RayCounts &counts) {
     const Camera &cam = scene.camera;
+    if (scene.settings.spp == 1) { // one ray per pixel: whole packets along each row
+        for (int j = y0; j < y1; ++j)
+            for (int i = x0; i < x1; i += W) {
+                const int n = std::min(W, x1 - i);
+                Mask active = mask_all(false);
+                for (int k = 0; k < n; ++k) active[k] = -1;
+                counts.primary += uint64_t(n);
+                store_pixels(out, cam.width, i, j, n,
+                             trace(scene, primary_rays(cam, i, j), active, counts));
+            }
+        return;
+    }
     const int tile_w = x1 - x0;
     std::vector<Color> sums(size_t(tile_w) * size_t(y1 - y0));
     RayL packet;

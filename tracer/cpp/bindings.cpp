@@ -62,7 +62,8 @@ using Image = nb::ndarray<nb::numpy, float, nb::shape<-1, -1, 3>>;
 static std::tuple<Image, nb::dict> render(const rt::Scene &scene, int threads,
                                           nb::object progress, bool packets) {
     const int W = scene.camera.width, H = scene.camera.height;
-    float *data = new float[size_t(W) * H * 3]();
+    // Not zeroed: every pixel is written (a cancelled render raises instead of returning).
+    float *data = new float[size_t(W) * H * 3];
     nb::capsule owner(data, [](void *p) noexcept { delete[] static_cast<float *>(p); });
     bool failed = false;
     rt::RenderResult result;
