@@ -88,12 +88,13 @@ inline double sphere_t(const Sphere &s, const Ray &ray, const Interval &range) {
     double c0 = dot(f, f) - r2;
     if (c0 > 0 && b > 0) return infinity; // outside and moving away: both roots negative
     double a = dot(ray.d, ray.d);
-    Vec3 l = f - (b / a) * ray.d;
+    double inv_a = 1 / a; // 1/a depends on the ray only: the packet tracer computes it once
+    Vec3 l = f - (b * inv_a) * ray.d;
     double D = a * (r2 - dot(l, l));
     if (D < 0) return infinity;
     double q = -(b + std::copysign(std::sqrt(D), b));
     if (q == 0) return infinity; // tangent at the origin itself: t = 0 is out of range
-    double t0 = c0 / q, t1 = q / a;
+    double t0 = c0 / q, t1 = q * inv_a;
     if (t0 > t1) std::swap(t0, t1);
     if (range.surrounds(t0)) return t0;
     if (range.surrounds(t1)) return t1;

@@ -94,7 +94,8 @@ struct RayL {
 // 05_sphere.h sphere_t(), per lane: the nearest root in (0, max), or infinity. Most packets
 // miss most spheres: when no live lane has a real root ahead, the roots' two divisions and the
 // square root are skipped (they cost more than all the rest).
-inline Lanes sphere_t(const Sphere &s, const RayL &ray, Lanes max, Mask active) {
+inline Lanes sphere_t(const Sphere &s, const RayL &ray, Lanes a, Lanes inv_a, Lanes max,
+                      Mask active) {
     const Lanes inf = splat(infinity);
     Vec3L f = ray.o - splat(s.center);
     Lanes b = dot(f, ray.d);
@@ -102,12 +103,11 @@ inline Lanes sphere_t(const Sphere &s, const RayL &ray, Lanes max, Mask active) 
     Lanes c0 = dot(f, f) - r2;
     Mask away = (c0 > 0) & (b > 0);
     if (!any(active & ~away)) return inf;
-    Lanes a = dot(ray.d, ray.d);
-    Vec3L l = f - ray.d * (b / a);
+    Vec3L l = f - ray.d * (b * inv_a);
     Lanes D = a * (r2 - dot(l, l));
     if (!any(active & ~away & (D >= 0))) return inf;
     Lanes q = -(b + copysign(sqrt(D), b));
-    Lanes t0 = c0 / q, t1 = q / a;
+    Lanes t0 = c0 / q, t1 = q * inv_a;
     Mask swap = t0 > t1;
     Lanes lo = select(swap, t1, t0), hi = select(swap, t0, t1);
     Lanes t = select((lo > 0) & (lo < max), lo, select((hi > 0) & (hi < max), hi, inf));
@@ -132,8 +132,9 @@ inline ClosestL closest_hit(const Scene &scene, const RayL &ray, Mask active) {
     ClosestL c;
     c.t = splat(infinity);
     for (int k = 0; k < W; ++k) c.kind[k] = c.index[k] = -1;
+    const Lanes a = dot(ray.d, ray.d), inv_a = 1 / a;
     for (size_t i = 0; i < scene.spheres.size(); ++i) {
-        Lanes t = sphere_t(scene.spheres[i], ray, c.t, active);
+        Lanes t = sphere_t(scene.spheres[i], ray, a, inv_a, c.t, active);
         Mask closer = active & (t < c.t);
         if (!any(closer)) continue;
         c.t = select(closer, t, c.t);
@@ -154,8 +155,9 @@ inline ClosestL closest_hit(const Scene &scene, const RayL &ray, Mask active) {
 // 09_scene.h any_hit(), per lane, for the lanes of `active`.
 inline Mask any_hit(const Scene &scene, const RayL &ray, Lanes max, Mask active) {
     Mask blocked = mask_all(false);
+    const Lanes a = dot(ray.d, ray.d), inv_a = 1 / a;
     for (const Sphere &s : scene.spheres) {
-        blocked |= active & (sphere_t(s, ray, max, active & ~blocked) != infinity);
+        blocked |= active & (sphere_t(s, ray, a, inv_a, max, active & ~blocked) != infinity);
         if (!any(active & ~blocked)) return blocked;
     }
     for (const Plane &pl : scene.planes) {
