@@ -14,6 +14,7 @@
 #include <cmath>
 
 #include "09_scene.h"
+#include "power.h"
 
 namespace rt {
 
@@ -36,10 +37,11 @@ inline Vec3 reflect(const Vec3 &d, const Vec3 &N) { return d - 2 * dot(d, N) * N
 
 // Phong (slide "Specular reflection"): the highlight peaks where the mirror direction R of the
 // incoming ray points at the light, and narrows as the exponent grows. R.L equals V.R' with
-// R' = 2(N.L)N - L, the slide's form, by the symmetry of reflection.
+// R' = 2(N.L)N - L, the slide's form, by the symmetry of reflection. (power() is pow(); see
+// power.h for why it is our own.)
 inline double phong_term(const Vec3 &R, const Vec3 &L, double shininess) {
     double cos_alpha = dot(R, L);
-    return cos_alpha > 0 ? std::pow(cos_alpha, shininess) : 0.0;
+    return cos_alpha > 0 ? power(cos_alpha, shininess) : 0.0;
 }
 
 // L: the unit direction from the hit towards a light.

@@ -20,11 +20,7 @@
 
 namespace rt {
 
-constexpr int W = 8; // rays per packet
-
-typedef double Lanes __attribute__((vector_size(W * sizeof(double))));
-typedef int64_t Mask __attribute__((vector_size(W * sizeof(int64_t)))); // lane true: all ones
-
+// W, Lanes and Mask are declared in power.h, which both tracers share.
 inline Lanes splat(double v) { return Lanes{} + v; }
 inline Mask mask_all(bool v) { return Mask{} + (v ? -1 : 0); }
 inline bool any(Mask m) {
@@ -32,7 +28,6 @@ inline bool any(Mask m) {
         if (m[k]) return true;
     return false;
 }
-inline Lanes select(Mask m, Lanes a, Lanes b) { return m ? a : b; }
 inline Lanes sqrt(Lanes x) {
     Lanes r;
     for (int k = 0; k < W; ++k) r[k] = std::sqrt(x[k]); // one vsqrtpd (built -fno-math-errno)
@@ -300,10 +295,8 @@ inline Mask trace_level(const Scene &scene, RayL &ray, Mask active, Lanes &coef,
         add_where(lit, local, (m_color * lc) * (diffuse * NL));
         Mask highlight = lit & (specular != 0);
         if (any(highlight)) {
-            Lanes cos_alpha = dot(R, L), phong = splat(0.0);
-            for (int k = 0; k < W; ++k) // one pow per lane, as phong_term() computes it
-                if (highlight[k] && cos_alpha[k] > 0)
-                    phong[k] = std::pow(cos_alpha[k], shininess[k]);
+            Lanes cos_alpha = dot(R, L);
+            Lanes phong = select(cos_alpha > 0, power(cos_alpha, shininess), splat(0.0));
             add_where(highlight, local, lc * (specular * phong));
         }
     }

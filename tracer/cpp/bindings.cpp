@@ -211,6 +211,9 @@ NB_MODULE(_core, m) {
         "center"_a, "radius"_a, "origin"_a, "direction"_a,
         "The sphere case (one of the five) and the closest hit with t > 0, or None.");
 
+    m.def("power", [](double x, double n) { return rt::power(x, n); }, "x"_a, "n"_a,
+          "x^n as the Phong term computes it (power.h), for 0 < x <= 1 and n > 0.");
+
     m.def(
         "offset_ray_origin",
         [](Triple p, Triple p_error, Triple normal, Triple toward) {
