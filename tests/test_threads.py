@@ -29,3 +29,23 @@ def test_one_sample_is_the_pixel_centre_and_needs_no_seed():
     a = tracer.render(scene.with_overrides(seed=1), threads=2)
     b = tracer.render(scene.with_overrides(seed=2), threads=1)
     assert np.array_equal(a, b)
+
+
+def test_render_releases_the_gil():
+    """While the core renders, other Python threads run: the render does not hold the GIL."""
+    import threading
+
+    scene = tracer.load_scene(demo_scene_path()).with_overrides(width=1600, height=1200, spp=4)
+    done = threading.Event()
+    ticks = 0
+
+    def work():
+        tracer.render(scene, threads=1, progress=False)
+        done.set()
+
+    worker = threading.Thread(target=work)
+    worker.start()
+    while not done.is_set():  # pure Python: it only advances while the GIL is free
+        ticks += 1
+    worker.join()
+    assert ticks > 10_000
