@@ -63,7 +63,8 @@ def test_directional_light_is_blocked_anywhere_along_its_direction():
 def test_no_lights_no_shadow_rays():
     """A feature the scene does not use costs nothing."""
     _, rays = floor_pixel([], [sphere([1, 1, 0], 0.3)])
-    assert rays == {"primary": 1, "secondary": 0, "shadow": 0}
+    assert (rays["primary"], rays["secondary"], rays["shadow"]) == (1, 0, 0)
+    assert rays["primitive_tests"] == 2  # the one primary ray against the floor and the sphere
 
 
 def test_no_light_terms_no_shadow_rays():

@@ -112,7 +112,7 @@ inline void sphere_hit(const Sphere &s, const Ray &ray, double t, Hit &hit) {
     // Error of the projected point: the scaling costs gamma(5) of |local| (pbrt-v4 eq. 6.39),
     // the subtraction of and the addition back of the centre one rounding each of |c| + |local|.
     hit.p_error = gamma(7) * (abs(s.center) + abs(local));
-    hit.N = local / s.radius;
+    hit.N = hit.Ng = local / s.radius;
     hit.object = s.object;
     hit.material = s.material;
 }

@@ -32,7 +32,7 @@ inline void plane_hit(const Plane &pl, const Ray &ray, double t, Hit &hit) {
     hit.t = t;
     hit.p = p;
     hit.p_error = {e, e, e};
-    hit.N = pl.normal;
+    hit.N = hit.Ng = pl.normal;
     hit.object = pl.object;
     hit.material = pl.material;
 }

@@ -2,11 +2,14 @@
 // asks of it: what is the closest hit (primary and secondary rays), and is anything in the way
 // (shadow rays).
 //
-// As in the course's Ex 25 ("no object abstraction, STL vector<> for lists"), each kind of
-// object has its own list; every object keeps its index into the scene file's [[objects]].
+// As in the course's Ex 25 ("no object abstraction, STL vector<> for lists"), spheres and planes
+// have lists of their own; every other kind of object (boxes, triangles, meshes, cylinders, tori:
+// "Building a real Ray Tracer in C++") is an Object with a virtual hit(). Every object keeps its
+// index into the scene file's [[objects]].
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "03_camera.h"
@@ -33,14 +36,16 @@ struct Scene {
     std::vector<Light> lights;
     std::vector<Sphere> spheres;
     std::vector<Plane> planes;
+    std::vector<std::shared_ptr<const Object>> objects;
 };
 
 // "Find nearest hit" (slide "How ray tracing works"). The search needs only each object's t;
 // the hit record (point, error bound, normal) is computed once, for the closest.
-inline Hit closest_hit(const Scene &scene, const Ray &ray) {
+inline Hit closest_hit(const Scene &scene, const Ray &ray, RayCounts &counts) {
     Interval range{0, infinity};
     const Sphere *sphere = nullptr;
     const Plane *plane = nullptr;
+    counts.primitive_tests += scene.spheres.size() + scene.planes.size();
     for (const Sphere &s : scene.spheres) {
         double t = sphere_t(s, ray, range);
         if (t < range.max) range.max = t, sphere = &s;
@@ -50,17 +55,26 @@ inline Hit closest_hit(const Scene &scene, const Ray &ray) {
         if (range.surrounds(t)) range.max = t, plane = &pl, sphere = nullptr;
     }
     Hit hit;
+    for (const auto &object : scene.objects)
+        if (object->hit(ray, range, hit, counts)) range.max = hit.t, plane = nullptr, sphere = nullptr;
     if (plane) plane_hit(*plane, ray, range.max, hit);
     else if (sphere) sphere_hit(*sphere, ray, range.max, hit);
     return hit;
 }
 
 // "Objects block light": true as soon as any object lies within the range; no need to sort.
-inline bool any_hit(const Scene &scene, const Ray &ray, const Interval &range) {
-    for (const Sphere &s : scene.spheres)
+inline bool any_hit(const Scene &scene, const Ray &ray, const Interval &range,
+                    RayCounts &counts) {
+    for (const Sphere &s : scene.spheres) {
+        ++counts.primitive_tests;
         if (sphere_blocks(s, ray, range)) return true;
-    for (const Plane &pl : scene.planes)
+    }
+    for (const Plane &pl : scene.planes) {
+        ++counts.primitive_tests;
         if (plane_blocks(pl, ray, range)) return true;
+    }
+    for (const auto &object : scene.objects)
+        if (object->blocks(ray, range, counts)) return true;
     return false;
 }
 

@@ -18,11 +18,6 @@
 
 namespace rt {
 
-// Counts of the three kinds of rays (slide "What is a Ray?"), kept per thread.
-struct RayCounts {
-    uint64_t primary = 0, secondary = 0, shadow = 0;
-};
-
 // Ambient: light that arrives from everywhere, unshadowed.
 inline Color ambient_term(const Material &m, const Color &ambient_light) {
     return m.color * (m.ambient * ambient_light);
@@ -54,26 +49,28 @@ inline Vec3 to_light(const Light &light, const Vec3 &p) {
 // is moved off the surface by the hit's error bound (02_ray.h), so the surface the ray leaves
 // cannot block it. Towards a point light the direction is left unnormalised, light - origin, so
 // that the light itself sits at t = 1 and the blocking range is exactly (0, 1).
-inline Ray shadow_ray(const Hit &hit, const Vec3 &N, const Light &light, const Vec3 &L) {
-    Vec3 o = offset_ray_origin(hit.p, hit.p_error, N, L);
+inline Ray shadow_ray(const Hit &hit, const Vec3 &Ng, const Light &light, const Vec3 &L) {
+    Vec3 o = offset_ray_origin(hit.p, hit.p_error, Ng, L);
     if (light.type == Light::Type::directional) return {o, L};
     return {o, light.position - o};
 }
 
-inline bool in_shadow(const Scene &scene, const Ray &shadow, const Light &light) {
+inline bool in_shadow(const Scene &scene, const Ray &shadow, const Light &light,
+                      RayCounts &counts) {
     double max_t = light.type == Light::Type::directional ? infinity : 1.0;
-    return any_hit(scene, shadow, {0, max_t});
+    return any_hit(scene, shadow, {0, max_t}, counts);
 }
 
-// Secondary (reflected) ray: starts just off the surface on the side it leaves to.
-inline Ray secondary_ray(const Hit &hit, const Vec3 &N, const Vec3 &R) {
-    return {offset_ray_origin(hit.p, hit.p_error, N, R), R};
+// Secondary (reflected) ray: starts just off the surface on the side it leaves to (measured
+// along the geometric normal Ng, the surface's own).
+inline Ray secondary_ray(const Hit &hit, const Vec3 &Ng, const Vec3 &R) {
+    return {offset_ray_origin(hit.p, hit.p_error, Ng, R), R};
 }
 
 // The light one hit returns without its reflection: C_k of the slide's chain
 // alpha1 (C1 + alpha2 (C2 + ...)).
 inline Color local_color(const Scene &scene, const Material &m, const Hit &hit, const Vec3 &N,
-                         const Vec3 &R, RayCounts &counts) {
+                         const Vec3 &Ng, const Vec3 &R, RayCounts &counts) {
     Color color = ambient_term(m, scene.settings.ambient_light);
     if (m.diffuse == 0 && m.specular == 0) return color; // no light term: no shadow rays
     for (const Light &light : scene.lights) {
@@ -81,7 +78,7 @@ inline Color local_color(const Scene &scene, const Material &m, const Hit &hit, 
         double NL = lambert_term(N, L);
         if (NL <= 0) continue; // the light is behind the surface
         ++counts.shadow;
-        if (in_shadow(scene, shadow_ray(hit, N, light, L), light)) continue;
+        if (in_shadow(scene, shadow_ray(hit, Ng, light, L), light, counts)) continue;
         color += (m.diffuse * NL) * (m.color * light.color);
         if (m.specular != 0) color += (m.specular * phong_term(R, L, m.shininess)) * light.color;
     }
@@ -100,19 +97,21 @@ inline Color trace(const Scene &scene, Ray ray, RayCounts &counts) {
         if (level > s.max_depth) break;      // past the last level: black
         if (coef < s.min_coefficient) break; // "coef << 1": black
         if (level > 1) ++counts.secondary;
-        Hit hit = closest_hit(scene, ray);
+        Hit hit = closest_hit(scene, ray, counts);
         if (!hit.found()) {
             color += coef * s.background;
             break;
         }
         const Material &m = scene.materials[hit.material];
-        // Turn N to face the incoming ray: the side we see is the side we shade.
-        Vec3 N = dot(hit.N, ray.d) > 0 ? -hit.N : hit.N;
+        // Turn N to face the incoming ray: the side we see is the side we shade. (The shading
+        // normal N of a smooth mesh follows its geometric normal Ng to that side.)
+        Vec3 Ng = dot(hit.Ng, ray.d) > 0 ? -hit.Ng : hit.Ng;
+        Vec3 N = dot(hit.N, Ng) < 0 ? -hit.N : hit.N;
         Vec3 R = reflect(ray.d, N);
-        color += coef * local_color(scene, m, hit, N, R, counts);
+        color += coef * local_color(scene, m, hit, N, Ng, R, counts);
         if (m.reflectivity == 0) break; // a feature not used costs nothing: no reflected ray
         coef *= m.reflectivity;
-        ray = secondary_ray(hit, N, R);
+        ray = secondary_ray(hit, Ng, R);
     }
     return color;
 }

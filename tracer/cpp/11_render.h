@@ -139,6 +139,8 @@ inline RenderResult render(const Scene &scene, int threads, float *out,
         result.counts.primary += c.primary;
         result.counts.secondary += c.secondary;
         result.counts.shadow += c.shadow;
+        result.counts.box_tests += c.box_tests;
+        result.counts.primitive_tests += c.primitive_tests;
     }
     return result;
 }

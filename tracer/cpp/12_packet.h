@@ -2,7 +2,8 @@
 // 10_classic.h, traced for a packet of W rays at once, so that each arithmetic step runs on all
 // W rays in one SIMD instruction (GCC/Clang vector extensions; AVX-512 holds 8 doubles).
 //
-// This file adds speed, not behaviour: every step below is the step of 05_sphere.h, 06_plane.h,
+// It serves scenes of spheres and planes (Ex 25's objects); a scene with other objects is traced
+// one ray at a time. This file adds speed, not behaviour: every step below is the step of 05_sphere.h, 06_plane.h,
 // 09_scene.h and 10_classic.h with the same operations in the same order, so each lane computes
 // bit for bit what the one-ray code computes (IEEE-754 add, mul, div and sqrt are correctly
 // rounded in vector units too, and the build forbids fused multiply-add contraction).
@@ -23,6 +24,11 @@ namespace rt {
 // W, Lanes and Mask are declared in power.h, which both tracers share.
 inline Lanes splat(double v) { return Lanes{} + v; }
 inline Mask mask_all(bool v) { return Mask{} + (v ? -1 : 0); }
+inline int count(Mask m) {
+    int n = 0;
+    for (int k = 0; k < W; ++k) n += m[k] != 0;
+    return n;
+}
 inline bool any(Mask m) {
     for (int k = 0; k < W; ++k)
         if (m[k]) return true;
@@ -123,8 +129,10 @@ struct ClosestL {
     int64_t kind[W], index[W];
 };
 
-inline ClosestL closest_hit(const Scene &scene, const RayL &ray, Mask active) {
+inline ClosestL closest_hit(const Scene &scene, const RayL &ray, Mask active,
+                            RayCounts &counts) {
     ClosestL c;
+    counts.primitive_tests += uint64_t(count(active)) * (scene.spheres.size() + scene.planes.size());
     c.t = splat(infinity);
     for (int k = 0; k < W; ++k) c.kind[k] = c.index[k] = -1;
     const Lanes a = dot(ray.d, ray.d), inv_a = 1 / a;
@@ -148,14 +156,17 @@ inline ClosestL closest_hit(const Scene &scene, const RayL &ray, Mask active) {
 }
 
 // 09_scene.h any_hit(), per lane, for the lanes of `active`.
-inline Mask any_hit(const Scene &scene, const RayL &ray, Lanes max, Mask active) {
+inline Mask any_hit(const Scene &scene, const RayL &ray, Lanes max, Mask active,
+                    RayCounts &counts) {
     Mask blocked = mask_all(false);
     const Lanes a = dot(ray.d, ray.d), inv_a = 1 / a;
     for (const Sphere &s : scene.spheres) {
+        counts.primitive_tests += uint64_t(count(active & ~blocked));
         blocked |= active & (sphere_t(s, ray, a, inv_a, max, active & ~blocked) != infinity);
         if (!any(active & ~blocked)) return blocked;
     }
     for (const Plane &pl : scene.planes) {
+        counts.primitive_tests += uint64_t(count(active & ~blocked));
         Lanes t = plane_t(pl, ray);
         blocked |= active & (t > 0) & (t < max);
         if (!any(active & ~blocked)) return blocked;
@@ -242,7 +253,7 @@ inline HitL hit_record(const Scene &scene, const RayL &ray, const ClosestL &c, M
 inline Mask trace_level(const Scene &scene, RayL &ray, Mask active, Lanes &coef, ColorL &color,
                         RayCounts &counts) {
     const Settings &s = scene.settings;
-    ClosestL closest = closest_hit(scene, ray, active);
+    ClosestL closest = closest_hit(scene, ray, active, counts);
     Mask found = active & (closest.t != infinity);
     add_where(active & ~found, color, splat(s.background) * coef);
     active = found;
@@ -284,12 +295,12 @@ inline Mask trace_level(const Scene &scene, RayL &ray, Mask active, Lanes &coef,
         Lanes NL = dot(N, L);
         Mask lit = shaded & (NL > 0);
         if (!any(lit)) continue;
-        for (int k = 0; k < W; ++k) counts.shadow += lit[k] != 0;
+        counts.shadow += uint64_t(count(lit));
         RayL shadow;
         shadow.o = offset_ray_origin(hit.p, hit.p_error, N, L);
         shadow.d = light.type == Light::Type::directional ? L : splat(light.position) - shadow.o;
         double max_t = light.type == Light::Type::directional ? infinity : 1.0;
-        lit &= ~any_hit(scene, shadow, splat(max_t), lit);
+        lit &= ~any_hit(scene, shadow, splat(max_t), lit, counts);
         if (!any(lit)) continue;
         const ColorL lc = splat(light.color);
         add_where(lit, local, (m_color * lc) * (diffuse * NL));
@@ -322,8 +333,7 @@ inline ColorL trace(const Scene &scene, RayL ray, Mask active, RayCounts &counts
     for (int level = 1; level <= s.max_depth; ++level) { // past the last level: black
         active &= ~(coef < s.min_coefficient);            // "coef << 1": black
         if (!any(active)) break;
-        if (level > 1)
-            for (int k = 0; k < W; ++k) counts.secondary += active[k] != 0;
+        if (level > 1) counts.secondary += uint64_t(count(active));
         active = trace_level(scene, ray, active, coef, color, counts);
     }
     return color;

@@ -52,6 +52,8 @@ static nb::dict counts_dict(const rt::RayCounts &c) {
     d["primary"] = c.primary;
     d["secondary"] = c.secondary;
     d["shadow"] = c.shadow;
+    d["box_tests"] = c.box_tests;
+    d["primitive_tests"] = c.primitive_tests;
     return d;
 }
 
@@ -86,8 +88,10 @@ static std::tuple<Image, nb::dict> render(const rt::Scene &scene, int threads,
             }
             return true;
         };
+        // Packets serve scenes of spheres and planes only (12_packet.h).
+        bool use_packets = packets && scene.objects.empty();
         result = rt::render(scene, threads, data, poll,
-                            packets ? rt::render_tile_packets : rt::render_tile_rays);
+                            use_packets ? rt::render_tile_packets : rt::render_tile_rays);
     }
     if (failed) throw nb::python_error();
     if (!progress.is_none()) progress(1, 1);
@@ -177,7 +181,8 @@ NB_MODULE(_core, m) {
         .def(
             "closest_hit",
             [](const rt::Scene &s, Triple origin, Triple direction) -> std::optional<nb::dict> {
-                rt::Hit hit = rt::closest_hit(s, {vec(origin), vec(direction)});
+                rt::RayCounts counts;
+                rt::Hit hit = rt::closest_hit(s, {vec(origin), vec(direction)}, counts);
                 if (!hit.found()) return std::nullopt;
                 return hit_dict(hit);
             },
