@@ -6,6 +6,7 @@
 #include <nanobind/stl/optional.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/tuple.h>
+#include <nanobind/stl/vector.h>
 
 #include <array>
 #include <optional>
@@ -14,6 +15,7 @@
 #include <tuple>
 
 #include "12_packet.h"
+#include "19_aov.h"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -57,15 +59,25 @@ static nb::dict counts_dict(const rt::RayCounts &c) {
     return d;
 }
 
-using Image = nb::ndarray<nb::numpy, float, nb::shape<-1, -1, 3>>;
+using Image = nb::ndarray<nb::numpy, float, nb::shape<-1, -1, -1>>;
+using Matrix34 = std::array<std::array<double, 4>, 3>;
+
+static rt::Transform transform_from(const std::optional<Matrix34> &m) {
+    if (!m) return {};
+    double a[3][4];
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 4; ++j) a[i][j] = (*m)[size_t(i)][size_t(j)];
+    return rt::Transform::from_matrix(a);
+}
 
 // Render with the GIL released. Every 100 ms the watching thread takes the GIL to check for
 // Ctrl-C and to report progress; an exception from either cancels the render and is re-raised.
 static std::tuple<Image, nb::dict> render(const rt::Scene &scene, int threads,
-                                          nb::object progress, bool packets) {
+                                          nb::object progress, bool packets, bool aov) {
     const int W = scene.camera.width, H = scene.camera.height;
+    const size_t channels = aov ? rt::aov_channels : 3;
     // Not zeroed: every pixel is written (a cancelled render raises instead of returning).
-    float *data = new float[size_t(W) * H * 3];
+    float *data = new float[size_t(W) * H * channels];
     nb::capsule owner(data, [](void *p) noexcept { delete[] static_cast<float *>(p); });
     bool failed = false;
     rt::RenderResult result;
@@ -90,12 +102,14 @@ static std::tuple<Image, nb::dict> render(const rt::Scene &scene, int threads,
         };
         // Packets serve scenes of spheres and planes only (12_packet.h).
         bool use_packets = packets && scene.objects.empty();
-        result = rt::render(scene, threads, data, poll,
-                            use_packets ? rt::render_tile_packets : rt::render_tile_rays);
+        rt::TileRenderer tiles = aov           ? rt::render_tile_aov
+                                 : use_packets ? rt::render_tile_packets
+                                               : rt::render_tile_rays;
+        result = rt::render(scene, threads, data, poll, tiles);
     }
     if (failed) throw nb::python_error();
     if (!progress.is_none()) progress(1, 1);
-    Image image(data, {size_t(H), size_t(W), size_t(3)}, owner);
+    Image image(data, {size_t(H), size_t(W), channels}, owner);
     return {image, counts_dict(result.counts)};
 }
 
@@ -172,6 +186,80 @@ NB_MODULE(_core, m) {
             },
             "point"_a, "normal"_a, "object"_a, "material"_a)
         .def(
+            "add_box",
+            [](rt::Scene &s, Triple min, Triple max, std::optional<Matrix34> to_world, int object,
+               int material) {
+                auto box = std::make_shared<rt::Box>();
+                box->box.min = vec(min);
+                box->box.max = vec(max);
+                box->transform = transform_from(to_world);
+                box->object = object, box->material = material;
+                s.objects.push_back(box);
+            },
+            "min"_a, "max"_a, "to_world"_a.none(), "object"_a, "material"_a)
+        .def(
+            "add_cylinder",
+            [](rt::Scene &s, double radius, double height, bool capped, Matrix34 to_world,
+               int object, int material) {
+                auto c = std::make_shared<rt::Cylinder>();
+                c->radius = radius, c->height = height, c->capped = capped;
+                c->transform = transform_from(to_world);
+                c->object = object, c->material = material;
+                s.objects.push_back(c);
+            },
+            "radius"_a, "height"_a, "capped"_a, "to_world"_a, "object"_a, "material"_a)
+        .def(
+            "add_torus",
+            [](rt::Scene &s, double major_radius, double minor_radius, Matrix34 to_world,
+               int object, int material) {
+                auto t = std::make_shared<rt::Torus>();
+                t->major_radius = major_radius, t->minor_radius = minor_radius;
+                t->transform = transform_from(to_world);
+                t->object = object, t->material = material;
+                s.objects.push_back(t);
+            },
+            "major_radius"_a, "minor_radius"_a, "to_world"_a, "object"_a, "material"_a)
+        .def(
+            "add_mesh",
+            [](rt::Scene &s, nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig> vertices,
+               nb::ndarray<const int32_t, nb::shape<-1, 3>, nb::c_contig> faces,
+               std::optional<nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig>> normals,
+               const std::string &acceleration, int object, int material) {
+                auto mesh = std::make_shared<rt::Mesh>();
+                size_t nv = vertices.shape(0), nf = faces.shape(0);
+                mesh->vertices.resize(nv);
+                for (size_t i = 0; i < nv; ++i)
+                    mesh->vertices[i] = {vertices(i, 0), vertices(i, 1), vertices(i, 2)};
+                mesh->triangles.resize(nf);
+                for (size_t i = 0; i < nf; ++i) {
+                    for (size_t k = 0; k < 3; ++k) {
+                        int v = faces(i, k);
+                        if (v < 0 || size_t(v) >= nv)
+                            throw std::out_of_range("mesh face refers to a missing vertex");
+                        mesh->triangles[i][k] = v;
+                    }
+                }
+                if (normals) {
+                    if (normals->shape(0) != nv)
+                        throw std::invalid_argument("one normal per vertex expected");
+                    mesh->normals.resize(nv);
+                    for (size_t i = 0; i < nv; ++i)
+                        mesh->normals[i] = {(*normals)(i, 0), (*normals)(i, 1), (*normals)(i, 2)};
+                }
+                mesh->acceleration = acceleration == "none"           ? rt::Acceleration::none
+                                     : acceleration == "bounding_box" ? rt::Acceleration::bounding_box
+                                                                      : rt::Acceleration::bvh;
+                {
+                    nb::gil_scoped_release release;
+                    mesh->build();
+                }
+                mesh->object = object, mesh->material = material;
+                s.objects.push_back(mesh);
+                return mesh->nodes.size();
+            },
+            "vertices"_a, "faces"_a, "normals"_a.none(), "acceleration"_a, "object"_a,
+            "material"_a, "Add a triangle mesh; returns the number of hierarchy nodes.")
+        .def(
             "primary_ray",
             [](const rt::Scene &s, double sx, double sy) {
                 rt::Ray r = s.camera.primary_ray(sx, sy);
@@ -197,7 +285,7 @@ NB_MODULE(_core, m) {
             "origin"_a, "direction"_a, "The classic colour seen along one ray.");
 
     m.def("render", &render, "scene"_a, "threads"_a, "progress"_a = nb::none(),
-          "packets"_a = true,
+          "packets"_a = true, "aov"_a = false,
           "Render to a float32 (height, width, 3) array; also returns the ray counts. "
           "packets=False traces one ray at a time (10_classic.h) instead of W at a time "
           "(12_packet.h); the images are the same.");

@@ -1,0 +1,209 @@
+// Slide "Intersecting a Complex Object": a triangle mesh on vertices, with Gouraud shading, is
+// "expensive to ray trace" if every ray is tested against every triangle. The slide's first
+// remedy: test the bounding box of the entire object first. The full remedy: a bounding volume
+// hierarchy (Kay and Kajiya 1986; Goldsmith and Salmon 1987), boxes within boxes, built with the
+// surface-area heuristic (MacDonald and Booth 1990; the binned build of Wald 2007): a ray
+// that misses a box skips every triangle inside it.
+//
+// Mesh::acceleration picks the remedy so a lesson can count what each saves (RayCounts).
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "15_triangle.h"
+
+namespace rt {
+
+enum class Acceleration { none, bounding_box, bvh };
+
+struct BVHNode {
+    AABB bounds;
+    int first = 0;  // leaf: first triangle (in Mesh::order); inner: index of the second child
+    int count = 0;  // triangles in a leaf; 0 for an inner node, whose first child follows it
+    int axis = 0;   // inner: the axis it was split along (visit the nearer child first)
+};
+
+struct Mesh : Object {
+    std::vector<Vec3> vertices;
+    std::vector<Vec3> normals; // per vertex, for smooth (Gouraud-style) shading; empty: flat
+    std::vector<std::array<int, 3>> triangles;
+    Acceleration acceleration = Acceleration::bvh;
+    std::vector<BVHNode> nodes; // nodes[0] is the root; its box bounds the whole mesh
+    std::vector<int> order;     // triangle indices in leaf order
+
+    // -- building -------------------------------------------------------------------------
+    AABB triangle_box(int t) const {
+        AABB b;
+        for (int v : triangles[size_t(t)]) b.extend(vertices[size_t(v)]);
+        return b;
+    }
+
+    void build() {
+        order.resize(triangles.size());
+        for (size_t i = 0; i < order.size(); ++i) order[i] = int(i);
+        nodes.clear();
+        std::vector<AABB> boxes(triangles.size());
+        std::vector<Vec3> centres(triangles.size());
+        for (size_t i = 0; i < triangles.size(); ++i) {
+            boxes[i] = triangle_box(int(i));
+            centres[i] = boxes[i].centre();
+        }
+        nodes.reserve(2 * triangles.size() + 1);
+        nodes.emplace_back();
+        if (acceleration == Acceleration::bvh)
+            build_node(0, 0, int(order.size()), 0, boxes, centres);
+        else { // one box around everything, one leaf of all triangles
+            for (const AABB &b : boxes) nodes[0].bounds.extend(b);
+            nodes[0].first = 0;
+            nodes[0].count = int(order.size());
+        }
+    }
+
+    // Surface-area heuristic: the chance that a ray through a box also passes through a box
+    // inside it is the ratio of their surface areas, so a split of n triangles into (L, R)
+    // costs about area(L) nL + area(R) nR (relative to area(parent)), against n for a leaf.
+    // Candidate splits: 16 bins of the triangles' centres along each axis.
+    void build_node(int index, int first, int count, int depth, const std::vector<AABB> &boxes,
+                    const std::vector<Vec3> &centres) {
+        AABB bounds, centre_bounds;
+        for (int i = first; i < first + count; ++i) {
+            bounds.extend(boxes[size_t(order[size_t(i)])]);
+            centre_bounds.extend(centres[size_t(order[size_t(i)])]);
+        }
+        nodes[size_t(index)].bounds = bounds;
+        // max_depth keeps the traversal stack (64 entries) from overflowing on any input.
+        constexpr int bins = 16, max_leaf = 4, max_depth = 60;
+        double best_cost = infinity;
+        int best_axis = -1, best_bin = 0;
+        if (count > max_leaf && depth < max_depth) {
+            for (int axis = 0; axis < 3; ++axis) {
+                double lo = centre_bounds.min[axis], hi = centre_bounds.max[axis];
+                if (!(hi > lo)) continue;
+                AABB bin_box[bins];
+                int bin_count[bins] = {};
+                double scale = bins / (hi - lo);
+                for (int i = first; i < first + count; ++i) {
+                    int t = order[size_t(i)];
+                    int b = std::min(bins - 1, int((centres[size_t(t)][axis] - lo) * scale));
+                    bin_box[b].extend(boxes[size_t(t)]);
+                    ++bin_count[b];
+                }
+                // Sweep: areas and counts left of each boundary, then right of it.
+                double left_area[bins - 1];
+                int left_count[bins - 1];
+                AABB acc;
+                int n = 0;
+                for (int b = 0; b < bins - 1; ++b) {
+                    acc.extend(bin_box[b]);
+                    n += bin_count[b];
+                    left_area[b] = acc.area();
+                    left_count[b] = n;
+                }
+                acc = AABB();
+                n = 0;
+                for (int b = bins - 1; b >= 1; --b) {
+                    acc.extend(bin_box[b]);
+                    n += bin_count[b];
+                    if (left_count[b - 1] == 0 || n == 0) continue;
+                    double cost = left_area[b - 1] * left_count[b - 1] + acc.area() * n;
+                    if (cost < best_cost) best_cost = cost, best_axis = axis, best_bin = b;
+                }
+            }
+        }
+        double leaf_cost = bounds.area() * count;
+        if (best_axis < 0 || (count <= 16 && leaf_cost <= best_cost)) {
+            nodes[size_t(index)].first = first;
+            nodes[size_t(index)].count = count;
+            return;
+        }
+        double lo = centre_bounds.min[best_axis], hi = centre_bounds.max[best_axis];
+        double scale = bins / (hi - lo);
+        auto middle = std::partition(
+            order.begin() + first, order.begin() + first + count, [&](int t) {
+                return std::min(bins - 1, int((centres[size_t(t)][best_axis] - lo) * scale)) <
+                       best_bin;
+            });
+        int left = int(middle - order.begin()) - first;
+        nodes[size_t(index)].axis = best_axis;
+        int left_index = int(nodes.size());
+        nodes.emplace_back();
+        build_node(left_index, first, left, depth + 1, boxes, centres);
+        int right_index = int(nodes.size());
+        nodes.emplace_back();
+        nodes[size_t(index)].first = right_index;
+        build_node(right_index, first + left, count - left, depth + 1, boxes, centres);
+    }
+
+    // -- tracing --------------------------------------------------------------------------
+    // Walk the hierarchy front to back; `any` stops at the first hit (shadow rays).
+    bool traverse(const Ray &ray, Interval range, TriangleHit &best, int &best_triangle,
+                  RayCounts &counts, bool any) const {
+        if (nodes.empty()) return false;
+        const WatertightRay wr(ray);
+        const Vec3 inv_d = reciprocal(ray.d);
+        const bool negative[3] = {ray.d.x < 0, ray.d.y < 0, ray.d.z < 0};
+        int stack[64], top = 0;
+        int index = 0;
+        bool found = false;
+        for (;;) {
+            const BVHNode &node = nodes[size_t(index)];
+            ++counts.box_tests;
+            double t_near, t_far;
+            if (slab_test(node.bounds, ray.o, inv_d, range, t_near, t_far)) {
+                if (node.count > 0) { // a leaf: its triangles
+                    counts.primitive_tests += uint64_t(node.count);
+                    for (int i = node.first; i < node.first + node.count; ++i) {
+                        const std::array<int, 3> &tri = triangles[size_t(order[size_t(i)])];
+                        TriangleHit th;
+                        if (intersect_triangle(vertices[size_t(tri[0])], vertices[size_t(tri[1])],
+                                               vertices[size_t(tri[2])], wr, range, th)) {
+                            best = th;
+                            best_triangle = order[size_t(i)];
+                            range.max = th.t;
+                            found = true;
+                            if (any) return true;
+                        }
+                    }
+                } else { // visit the child on the ray's near side first
+                    int near = index + 1, far = node.first;
+                    if (negative[node.axis]) std::swap(near, far);
+                    stack[top++] = far;
+                    index = near;
+                    continue;
+                }
+            }
+            if (top == 0) break;
+            index = stack[--top];
+        }
+        return found;
+    }
+
+    bool hit(const Ray &ray, const Interval &range, Hit &hit, RayCounts &counts) const override {
+        TriangleHit th;
+        int t = -1;
+        if (!traverse(ray, range, th, t, counts, false)) return false;
+        const std::array<int, 3> &tri = triangles[size_t(t)];
+        triangle_hit(vertices[size_t(tri[0])], vertices[size_t(tri[1])], vertices[size_t(tri[2])],
+                     th, hit);
+        if (!normals.empty()) { // Gouraud-style: the vertex normals, interpolated
+            Vec3 n = th.b0 * normals[size_t(tri[0])] + th.b1 * normals[size_t(tri[1])] +
+                     th.b2 * normals[size_t(tri[2])];
+            double len = length(n);
+            if (len > 0) hit.N = n / len;
+        }
+        hit.object = object;
+        hit.material = material;
+        return true;
+    }
+
+    bool blocks(const Ray &ray, const Interval &range, RayCounts &counts) const override {
+        TriangleHit th;
+        int t = -1;
+        return traverse(ray, range, th, t, counts, true);
+    }
+};
+
+} // namespace rt

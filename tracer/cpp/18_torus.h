@@ -1,0 +1,126 @@
+// Slide "Object Class" (implicit surfaces: torus). In its own coordinates the torus lies around
+// the z axis: the points at distance r (minor radius) from the circle of radius R (major radius)
+// in the plane z = 0,
+//     (x^2 + y^2 + z^2 + R^2 - r^2)^2 - 4 R^2 (x^2 + y^2) = 0,
+// a quartic in t along a ray. Closed-form quartic solutions (Ferrari) lose every digit for thin
+// tori and grazing rays. Instead (after moving the ray's origin to the point nearest the centre,
+// which keeps the coefficients small): the quartic's real roots are isolated between the roots
+// of its derivative (a cubic), whose own roots lie between the roots of its derivative (a
+// quadratic, solved in closed form); on each interval where the function is monotone, a sign
+// change brackets exactly one root, found by bisection to the last bit. Slow next to a formula,
+// but it cannot miss a root that changes sign, nor report one that does not exist.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "17_cylinder.h"
+
+namespace rt {
+
+// p(x) = c[0] + c[1] x + ... + c[n] x^n by Horner's rule.
+inline double polynomial(const double *c, int n, double x) {
+    double v = c[n];
+    for (int i = n - 1; i >= 0; --i) v = v * x + c[i];
+    return v;
+}
+
+// The root of p in [lo, hi] where p(lo) and p(hi) differ in sign, to the last bit.
+inline double bisect(const double *c, int n, double lo, double hi) {
+    double f_lo = polynomial(c, n, lo);
+    for (int i = 0; i < 200; ++i) {
+        double mid = 0.5 * (lo + hi);
+        if (mid <= lo || mid >= hi) break; // adjacent doubles: done
+        double f = polynomial(c, n, mid);
+        if ((f < 0) == (f_lo < 0)) lo = mid, f_lo = f;
+        else hi = mid;
+    }
+    return 0.5 * (lo + hi);
+}
+
+// The real roots of p (degree n <= 4) in [lo, hi], in increasing order, isolated between the
+// roots of p' (found the same way, recursively).
+inline void real_roots(const double *c, int n, double lo, double hi, std::vector<double> &out) {
+    out.clear();
+    if (n == 1) {
+        if (c[1] != 0) {
+            double x = -c[0] / c[1];
+            if (lo <= x && x <= hi) out.push_back(x);
+        }
+        return;
+    }
+    double d[4];
+    for (int i = 1; i <= n; ++i) d[i - 1] = i * c[i];
+    std::vector<double> critical;
+    real_roots(d, n - 1, lo, hi, critical);
+    std::vector<double> edges{lo};
+    edges.insert(edges.end(), critical.begin(), critical.end());
+    edges.push_back(hi);
+    for (size_t i = 0; i + 1 < edges.size(); ++i) {
+        double a = edges[i], b = edges[i + 1];
+        double fa = polynomial(c, n, a), fb = polynomial(c, n, b);
+        if (fa == 0) {
+            if (out.empty() || out.back() != a) out.push_back(a);
+        } else if ((fa < 0) != (fb < 0) && fb != 0) {
+            out.push_back(bisect(c, n, a, b));
+        }
+    }
+    if (polynomial(c, n, hi) == 0 && (out.empty() || out.back() != hi)) out.push_back(hi);
+}
+
+struct Torus : Object {
+    double major_radius = 1, minor_radius = 0.25;
+    Transform transform; // object -> world: centre at the origin, axis along +z
+
+    bool hit(const Ray &world_ray, const Interval &range, Hit &hit,
+             RayCounts &counts) const override {
+        ++counts.primitive_tests;
+        Ray ray = transform.to_object(world_ray);
+        const double R = major_radius, r = minor_radius;
+        // Work along the unit direction u, from the point o' of the line nearest the centre:
+        // p = o' + s u, with t = (s0 + s) / |d|.
+        double len = length(ray.d);
+        Vec3 u = ray.d / len;
+        double s0 = -dot(ray.o, u);
+        Vec3 o = ray.o + s0 * u;
+        double reach = R + r; // the bounding sphere
+        double o2 = dot(o, o);
+        if (o2 > reach * reach) return false;
+        double A = o2 + R * R - r * r;
+        double ou = o.x * u.x + o.y * u.y, uu = u.x * u.x + u.y * u.y;
+        double c[5] = {A * A - 4 * R * R * (o.x * o.x + o.y * o.y), -8 * R * R * ou,
+                       2 * A - 4 * R * R * uu, 0, 1};
+        double half = std::sqrt(reach * reach - o2); // the chord inside the bounding sphere
+        std::vector<double> roots;
+        real_roots(c, 4, -half * (1 + 1e-9) - 1e-300, half * (1 + 1e-9) + 1e-300, roots);
+        const double abs_c[5] = {std::fabs(c[0]), std::fabs(c[1]), std::fabs(c[2]), 0, 1};
+        const double dc[4] = {c[1], 2 * c[2], 0, 4};
+        for (double s : roots) {
+            double t = (s0 + s) / len;
+            if (!range.surrounds(t)) continue;
+            // A root is known only to within (Horner's rounding bound) / |slope| (Higham 5.1);
+            // one nearer the origin than that may be the surface a new ray starts on.
+            double slope = std::fabs(polynomial(dc, 3, s));
+            double uncertainty = gamma(8) * polynomial(abs_c, 4, std::fabs(s)) / slope;
+            if (!(s0 + s > uncertainty)) continue;
+            // Refine: move the point onto the tube, along the normal of the tube's circle.
+            Vec3 p = o + s * u;
+            double rho = std::sqrt(p.x * p.x + p.y * p.y);
+            Vec3 ring = rho > 0 ? Vec3{R * p.x / rho, R * p.y / rho, 0} : Vec3{R, 0, 0};
+            Vec3 N = normalize(p - ring);
+            p = ring + r * N;
+            hit.t = t;
+            hit.p = p;
+            hit.p_error = gamma(8) * (abs(ring) + abs(r * N));
+            hit.N = hit.Ng = N;
+            transform.to_world(hit);
+            hit.object = object;
+            hit.material = material;
+            return true;
+        }
+        return false;
+    }
+};
+
+} // namespace rt
