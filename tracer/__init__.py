@@ -1,16 +1,19 @@
 """rtlab's ray tracer: the course's classic algorithm, in C++, with a Python face."""
 
-from tracer.image import load_image, save_image
-from tracer.render import RenderResult, render, render_with_stats
+from tracer.image import load_exr_channels, load_image, save_aov, save_image
+from tracer.render import RenderResult, aov_channels, render, render_with_stats
 from tracer.scene import Scene, SceneError, load_scene
 
 __all__ = [
     "RenderResult",
     "Scene",
     "SceneError",
+    "aov_channels",
+    "load_exr_channels",
     "load_image",
     "load_scene",
     "render",
     "render_with_stats",
+    "save_aov",
     "save_image",
 ]

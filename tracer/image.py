@@ -83,6 +83,29 @@ def save_image(path: str | os.PathLike[str], image: npt.ArrayLike) -> Path:
     return Path(path)
 
 
+def save_aov(path: str | os.PathLike[str], channels: dict[str, npt.ArrayLike]) -> Path:
+    """Write named float32 channels (an aov render) to EXR, or stacked to NPY, atomically."""
+    fmt = image_format(path)
+    if fmt == ".png":
+        raise ImageFormatError(f"{path}: an aov render has no colours to show; write .exr or .npy")
+    data = {k: np.ascontiguousarray(v, dtype=np.float32) for k, v in channels.items()}
+    with atomic_path(path) as tmp:
+        if fmt == ".npy":
+            with open(tmp, "wb") as f:
+                np.save(f, np.stack(list(data.values()), axis=-1))
+        else:
+            _write_exr(tmp, data)
+    return Path(path)
+
+
+def load_exr_channels(path: str | os.PathLike[str]) -> dict[str, npt.NDArray[np.float32]]:
+    """Every channel of an EXR file by name, e.g. depth, object_id, N.X, N.Y, N.Z."""
+    import OpenEXR
+
+    with OpenEXR.File(str(path), separate_channels=True) as f:
+        return {name: np.asarray(c.pixels, dtype=np.float32) for name, c in f.channels().items()}
+
+
 def _write_exr(path: Path, channels: dict[str, npt.NDArray[np.float32]]) -> None:
     import OpenEXR
 

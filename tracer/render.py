@@ -12,12 +12,32 @@ import numpy as np
 import numpy.typing as npt
 
 from tracer import _core
-from tracer.scene import DirectionalLight, Plane, PointLight, Scene, Sphere
+from tracer.scene import (
+    Box,
+    Cylinder,
+    DirectionalLight,
+    Mesh,
+    Plane,
+    PointLight,
+    Quad,
+    Scene,
+    Sphere,
+    Torus,
+    Triangle,
+    cylinder_height,
+    to_world,
+    triangles,
+)
+
+AOV_CHANNELS = ("depth", "object_id", "N.X", "N.Y", "N.Z")
 
 
 @dataclass(frozen=True)
 class RenderResult:
-    image: npt.NDArray[np.float32]  # linear RGB, shape (height, width, 3)
+    #: classic: linear RGB, shape (height, width, 3); aov: (height, width, 5), the channels of
+    #: AOV_CHANNELS (depth: distance along the primary ray, inf on a miss; object_id: index in
+    #: [[objects]], -1 on a miss; N: the shading normal, front side, 0 on a miss).
+    image: npt.NDArray[np.float32]
     rays: dict[str, int]  # counts of primary, secondary (reflected) and shadow rays
     seconds: float  # wall time of the render itself
     threads: int
@@ -49,10 +69,27 @@ def to_core(scene: Scene) -> _core.Scene:
         elif isinstance(light, DirectionalLight):
             core.add_directional_light(light.direction, light.color)
     for i, obj in enumerate(scene.objects):
+        m = index[obj.material]
         if isinstance(obj, Sphere):
-            core.add_sphere(obj.center, obj.radius, i, index[obj.material])
+            core.add_sphere(obj.center, obj.radius, i, m)
         elif isinstance(obj, Plane):
-            core.add_plane(obj.point, obj.normal, i, index[obj.material])
+            core.add_plane(obj.point, obj.normal, i, m)
+        elif isinstance(obj, Box):
+            matrix = to_world(obj)[:3].tolist() if obj.transform is not None else None
+            core.add_box(obj.min, obj.max, matrix, i, m)
+        elif isinstance(obj, Cylinder):
+            core.add_cylinder(obj.radius, cylinder_height(obj), obj.capped,
+                              to_world(obj)[:3].tolist(), i, m)  # fmt: skip
+        elif isinstance(obj, Torus):
+            core.add_torus(obj.major_radius, obj.minor_radius, to_world(obj)[:3].tolist(), i, m)
+        elif isinstance(obj, Triangle | Quad | Mesh):
+            vertices, faces, normals = triangles(obj)
+            core.add_mesh(
+                np.ascontiguousarray(vertices, dtype=np.float64),
+                np.ascontiguousarray(faces, dtype=np.int32),
+                None if normals is None else np.ascontiguousarray(normals, dtype=np.float64),
+                scene.render.acceleration, i, m,
+            )  # fmt: skip
     return core
 
 
@@ -100,7 +137,8 @@ def render_with_stats(
     )
     start = time.perf_counter()
     try:
-        image, rays = _core.render(core, threads, callback, packets)
+        aov = scene.render.integrator == "aov"
+        image, rays = _core.render(core, threads, callback, packets, aov)
     finally:
         close()
     return RenderResult(image, dict(rays), time.perf_counter() - start, threads)
@@ -109,5 +147,11 @@ def render_with_stats(
 def render(
     scene: Scene, *, threads: int | None = None, progress: bool | None = None
 ) -> npt.NDArray[np.float32]:
-    """Render to a float32 linear RGB array of shape (height, width, 3)."""
+    """Render to a float32 linear RGB array of shape (height, width, 3); with the ``aov``
+    integrator, (height, width, 5): the channels of AOV_CHANNELS."""
     return render_with_stats(scene, threads=threads, progress=progress).image
+
+
+def aov_channels(image: npt.NDArray[np.float32]) -> dict[str, npt.NDArray[np.float32]]:
+    """An aov render as named (height, width) channels, as they go into an EXR file."""
+    return {name: np.ascontiguousarray(image[..., k]) for k, name in enumerate(AOV_CHANNELS)}
