@@ -8,8 +8,8 @@ from collections.abc import Sequence
 from importlib import resources
 from pathlib import Path
 
-from tracer.image import ImageFormatError, image_format, save_image
-from tracer.render import render_with_stats
+from tracer.image import ImageFormatError, image_format, save_aov, save_image
+from tracer.render import aov_channels, render_with_stats
 from tracer.scene import Scene, SceneError, load_scene
 
 DEMO_SCENE = "ex25.toml"
@@ -50,20 +50,26 @@ def _apply_overrides(scene: Scene, args: argparse.Namespace) -> Scene:
 
 
 def _render_to(scene: Scene, outputs: Sequence[Path], args: argparse.Namespace) -> None:
+    aov = scene.render.integrator == "aov"
     for out in outputs:  # refuse a bad suffix before spending time on the render
-        image_format(out)
+        if image_format(out) == ".png" and aov:
+            raise ImageFormatError(f"{out}: an aov render has no colours to show; use .exr or .npy")
     result = render_with_stats(
         scene, threads=args.threads, progress=None if not args.quiet else False
     )
     for out in outputs:
-        save_image(out, result.image)
+        if aov:
+            save_aov(out, aov_channels(result.image))
+        else:
+            save_image(out, result.image)
     if not args.quiet:
         rays = result.rays
-        total = sum(rays.values())
+        total = rays["primary"] + rays["secondary"] + rays["shadow"]
         print(
             f"{scene.camera.width}x{scene.camera.height}, {scene.render.spp} spp, "
             f"{result.threads} threads: {result.seconds:.3f} s, {total / 1e6:.2f} M rays "
-            f"({rays['primary']} primary, {rays['secondary']} secondary, {rays['shadow']} shadow)"
+            f"({rays['primary']} primary, {rays['secondary']} secondary, {rays['shadow']} shadow); "
+            f"{rays['box_tests']} ray/box and {rays['primitive_tests']} ray/primitive tests"
         )
         for out in outputs:
             print(f"wrote {out}")
