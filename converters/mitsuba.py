@@ -33,7 +33,20 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from tracer.image import atomic_path
-from tracer.scene import DirectionalLight, Plane, PointLight, Scene, Sphere
+from tracer.scene import (
+    Box,
+    Cylinder,
+    DirectionalLight,
+    Plane,
+    PointLight,
+    Scene,
+    Sphere,
+    Torus,
+    cylinder_height,
+    scene_extent,
+    to_world,
+    triangles,
+)
 
 LIBLLVM = "/usr/lib/x86_64-linux-gnu/libLLVM-19.so"
 if "DRJIT_LIBLLVM_PATH" not in os.environ and os.path.exists(LIBLLVM):
@@ -102,6 +115,16 @@ def _make_plugins() -> tuple[type, type]:
             self.specular = float(props.get("specular", 0.0))
             self.shininess = float(props.get("shininess", 40.0))
             self.reflectivity = float(props.get("reflectivity", 0.0))
+            # A tessellated torus carries its true shape, so the integrator can use the exact
+            # normal: centre, unit axis, major and minor radius (world space).
+            self.torus = None
+            if "torus_center" in props:
+                self.torus = (
+                    tuple(float(c) for c in props["torus_center"]),
+                    tuple(float(c) for c in props["torus_axis"]),
+                    float(props["torus_major_radius"]),
+                    float(props["torus_minor_radius"]),
+                )
             self.m_flags = mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide
             self.m_components = [self.m_flags]
 
@@ -205,7 +228,7 @@ def _make_plugins() -> tuple[type, type]:
                 if scalar and not active:
                     break
                 g = self._lookup(columns, si, active)
-                t, N = _refine_hit(g, o, d, mi.Float64(si.t), mi.Vector3d(si.n))
+                t, N = _refine_hit(g, o, d, mi.Float64(si.t), mi.Vector3d(si.sh_frame.n))
                 p = o + t * d
                 N = dr.select(dr.dot(N, d) > 0, -N, N)  # face the incoming ray
                 R = d - 2 * dr.dot(d, N) * N
@@ -251,23 +274,29 @@ def _make_plugins() -> tuple[type, type]:
 
 
 #: One row per shape: its kind, its geometry and its classic material.
-ROW = ("kind", "ax", "ay", "az", "radius", "nx", "ny", "nz", "r", "g", "b", "ambient",
+ROW = ("kind", "ax", "ay", "az", "radius", "nx", "ny", "nz", "minor", "r", "g", "b", "ambient",
        "diffuse", "specular", "shininess", "reflectivity")  # fmt: skip
-SPHERE, PLANE, OTHER = 0.0, 1.0, 2.0
+SPHERE, PLANE, OTHER, TORUS = 0.0, 1.0, 2.0, 3.0
 
 
 def _shape_row(shape: Any) -> list[float]:
     """Geometry from the shape's own parameters (its to_world), material from its BSDF."""
     m = shape.bsdf()
     material = [*m.color, m.ambient, m.diffuse, m.specular, m.shininess, m.reflectivity]
+    if m.torus is not None:  # a tessellated torus: its exact normal from the BSDF's record
+        centre, axis, major, minor = m.torus
+        return [TORUS, *centre, major, *axis, minor, *material]
+    kind = shape.shape_type()
+    if kind not in (mi.ShapeType.Sphere, mi.ShapeType.Disk, mi.ShapeType.Rectangle):
+        return [OTHER, 0, 0, 0, 0, 0, 0, 0, 0, *material]
     to_world = np.array(mi.traverse(shape)["to_world"].matrix, dtype=np.float64).reshape(4, 4)
-    if shape.shape_type() == mi.ShapeType.Sphere:  # to_world = translate(c) scale(r)
-        return [SPHERE, *to_world[:3, 3], float(np.linalg.norm(to_world[:3, 0])), 0, 0, 0,
+    if kind == mi.ShapeType.Sphere:  # to_world = translate(c) scale(r)
+        return [SPHERE, *to_world[:3, 3], float(np.linalg.norm(to_world[:3, 0])), 0, 0, 0, 0,
                 *material]  # fmt: skip
     if shape.shape_type() in (mi.ShapeType.Disk, mi.ShapeType.Rectangle):  # z = 0, normal +z
         n = np.cross(to_world[:3, 0], to_world[:3, 1])
-        return [PLANE, *to_world[:3, 3], 0.0, *(n / np.linalg.norm(n)), *material]
-    return [OTHER, 0, 0, 0, 0, 0, 0, 0, *material]
+        return [PLANE, *to_world[:3, 3], 0.0, *(n / np.linalg.norm(n)), 0, *material]
+    return [OTHER, 0, 0, 0, 0, 0, 0, 0, 0, *material]
 
 
 def _sphere_hit(g: dict[str, Any], o: Any, d: Any, t_mitsuba: Any) -> tuple[Any, Any]:
@@ -291,6 +320,30 @@ def _plane_hit(g: dict[str, Any], o: Any, d: Any) -> tuple[Any, Any]:
     return dr.dot(mi.Point3d(g["ax"], g["ay"], g["az"]) - o, n) / dr.dot(d, n), n
 
 
+def _torus_hit(g: dict[str, Any], o: Any, d: Any, t_mitsuba: Any) -> tuple[Any, Any]:
+    """The hit on the true torus, and its normal: Newton's method on the torus's distance
+    function along the ray, from the tessellated mesh's hit, which lies within a sagitta
+    (~1e-5 of the radii) of it. The distance function's gradient is the unit normal N, so each
+    step is t -= (|p - ring| - r) / (N.d); three steps reach double precision from there. (Near
+    grazing, N.d -> 0, a step is not taken.)"""
+    centre = mi.Point3d(g["ax"], g["ay"], g["az"])
+    axis = mi.Vector3d(g["nx"], g["ny"], g["nz"])
+    t = t_mitsuba
+    n = mi.Vector3d(0.0)
+    for _ in range(3):
+        p = o + t * d
+        local = p - centre
+        radial = local - dr.dot(local, axis) * axis
+        ring = centre + radial * (g["radius"] / dr.norm(radial))
+        to_p = p - ring
+        distance = dr.norm(to_p)
+        n = to_p / distance
+        slope = dr.dot(n, d)
+        step = (distance - g["minor"]) / slope
+        t = dr.select(dr.abs(slope) > 1e-3, t - step, t)
+    return t, n
+
+
 def _refine_hit(g: dict[str, Any], o: Any, d: Any, t_mitsuba: Any, n_mitsuba: Any) -> tuple:
     """The hit's t and outward unit normal in double, from the shape's parameters."""
     if not dr.is_jit_v(mi.Float):  # scalar: one ray, one kind of shape
@@ -298,14 +351,19 @@ def _refine_hit(g: dict[str, Any], o: Any, d: Any, t_mitsuba: Any, n_mitsuba: An
             t, n = _sphere_hit(g, o, d, t_mitsuba)
         elif g["kind"] == PLANE:
             t, n = _plane_hit(g, o, d)
+        elif g["kind"] == TORUS:
+            t, n = _torus_hit(g, o, d, t_mitsuba)
         else:
             t, n = t_mitsuba, n_mitsuba
         return t, dr.normalize(n)
     t_sphere, n_sphere = _sphere_hit(g, o, d, t_mitsuba)
     t_plane, n_plane = _plane_hit(g, o, d)
-    is_sphere, is_plane = g["kind"] == SPHERE, g["kind"] == PLANE
+    t_torus, n_torus = _torus_hit(g, o, d, t_mitsuba)
+    is_sphere, is_plane, is_torus = g["kind"] == SPHERE, g["kind"] == PLANE, g["kind"] == TORUS
     t = dr.select(is_sphere, t_sphere, dr.select(is_plane, t_plane, t_mitsuba))
     n = dr.select(is_sphere, n_sphere, dr.select(is_plane, n_plane, n_mitsuba))
+    t = dr.select(is_torus, t_torus, t)
+    n = dr.select(is_torus, n_torus, n)
     return t, dr.normalize(n)
 
 
@@ -354,27 +412,18 @@ def plane_matrix(plane: Plane, radius: float, eye: tuple[float, float, float]) -
     return m
 
 
-def scene_size(scene: Scene) -> float:
-    pts = [scene.camera.eye, scene.camera.look_at]
-    size = 1.0
-    for obj in scene.objects:
-        if isinstance(obj, Sphere):
-            pts.append(obj.center)
-            size = max(size, obj.radius)
-        else:
-            pts.append(obj.point)
-    return size + max(max(abs(c) for c in p) for p in pts)
-
-
 def _sampler(scene: Scene) -> dict[str, Any]:
     if scene.render.spp == 1:  # exactly the pixel centre, as the tracer and POV-Ray -A do
         return {"type": "stratified", "sample_count": 1, "jitter": False}
     return {"type": "independent", "sample_count": scene.render.spp, "seed": scene.render.seed}
 
 
-def to_mitsuba_dict(scene: Scene) -> dict[str, Any]:
-    """The scene as a dict for ``mi.load_dict`` (call ``use_variant`` first)."""
+def to_mitsuba_dict(scene: Scene, *, mesh_dir: str | os.PathLike[str] | None = None) -> dict:
+    """The scene as a dict for ``mi.load_dict`` (call ``use_variant`` first). Triangle meshes
+    (triangles, quads, meshes, tessellated tori) go to PLY files in ``mesh_dir`` (by default a
+    directory that lives as long as the process)."""
     cam, ren = scene.camera, scene.render
+    meshes = Path(mesh_dir) if mesh_dir is not None else _process_mesh_dir()
     d: dict[str, Any] = {
         "type": "scene",
         "integrator": {
@@ -403,21 +452,18 @@ def to_mitsuba_dict(scene: Scene) -> dict[str, Any]:
         },
     }
     for i, light in enumerate(scene.lights):
-        color = {"type": "rgb", "value": list(light.color)}
+        color = mi.ScalarColor3f(light.color)
         if isinstance(light, PointLight):
-            d[f"light_{i}"] = {
-                "type": "point",
-                "position": list(light.position),
-                "intensity": color,
-            }
+            d[f"light_{i}"] = {"type": "point", "position": mi.ScalarPoint3f(light.position),
+                               "intensity": color}  # fmt: skip
         elif isinstance(light, DirectionalLight):
-            d[f"light_{i}"] = {
-                "type": "directional", "direction": list(light.direction), "irradiance": color,
-            }  # fmt: skip
-    half = PLANE_SCALE * scene_size(scene)
+            d[f"light_{i}"] = {"type": "directional",
+                               "direction": mi.ScalarVector3f(light.direction),
+                               "irradiance": color}  # fmt: skip
+    half = PLANE_SCALE * scene_extent(scene)
     for i, obj in enumerate(scene.objects):
         m = scene.materials[obj.material]
-        bsdf = {
+        bsdf: dict[str, Any] = {
             "type": MATERIAL_PLUGIN,
             "color": mi.ScalarColor3f(m.color),
             "ambient": m.ambient,
@@ -426,13 +472,155 @@ def to_mitsuba_dict(scene: Scene) -> dict[str, Any]:
             "shininess": m.shininess,
             "reflectivity": m.reflectivity,
         }
-        if isinstance(obj, Sphere):
-            shape = {"type": "sphere", "center": list(obj.center), "radius": obj.radius}
-        else:
-            matrix = plane_matrix(obj, half, cam.eye)
-            shape = {"type": "disk", "to_world": mi.ScalarTransform4f(matrix.tolist())}
-        d[f"object_{i}"] = {**shape, "bsdf": bsdf}
+        for k, shape in enumerate(_shapes(obj, i, half, cam.eye, meshes, bsdf)):
+            d[f"object_{i}" + (f"_{k}" if k else "")] = {**shape, "bsdf": dict(bsdf)}
     return d
+
+
+def _transform(m: np.ndarray) -> Any:
+    return mi.ScalarTransform4f(np.asarray(m, dtype=np.float64).tolist())
+
+
+def _shapes(obj: Any, i: int, half: float, eye: Any, meshes: Path, bsdf: dict) -> list[dict]:
+    """Mitsuba shapes for one object (a capped cylinder needs three)."""
+    if isinstance(obj, Sphere):
+        return [{"type": "sphere", "center": mi.ScalarPoint3f(obj.center), "radius": obj.radius}]
+    if isinstance(obj, Plane):
+        return [{"type": "disk", "to_world": _transform(plane_matrix(obj, half, eye))}]
+    if isinstance(obj, Box):  # Mitsuba's cube is [-1, 1]^3
+        lo, hi = np.array(obj.min), np.array(obj.max)
+        fit = np.diag([*((hi - lo) / 2), 1.0])
+        fit[:3, 3] = (hi + lo) / 2
+        return [{"type": "cube", "to_world": _transform(to_world(obj) @ fit)}]
+    if isinstance(obj, Cylinder):  # Mitsuba's cylinder has no caps: add two discs
+        m = to_world(obj)
+        h, r = cylinder_height(obj), obj.radius
+        side = {"type": "cylinder", "p0": mi.ScalarPoint3f(0, 0, 0),
+                "p1": mi.ScalarPoint3f(0, 0, h), "radius": r}  # fmt: skip
+        shapes = [{**side, "to_world": _transform(m)}]
+        if obj.capped:
+            for z in (0.0, h):
+                disc = np.diag([r, r, 1.0, 1.0])
+                disc[2, 3] = z
+                shapes.append({"type": "disk", "to_world": _transform(m @ disc)})
+        return shapes
+    if isinstance(obj, Torus):
+        vertices, faces, normals = tessellate_torus(obj)
+        m = to_world(obj)
+        axis = m[:3, 2] / np.linalg.norm(m[:3, 2])
+        scale = float(np.cbrt(abs(np.linalg.det(m[:3, :3]))))
+        bsdf.update(torus_center=mi.ScalarPoint3f(m[:3, 3]), torus_axis=mi.ScalarVector3f(axis),
+                    torus_major_radius=obj.major_radius * scale,
+                    torus_minor_radius=obj.minor_radius * scale)  # fmt: skip
+        return [_ply(meshes / f"object_{i}.ply", vertices, faces, normals)]
+    vertices, faces, normals = triangles(obj)
+    return [_ply(meshes / f"object_{i}.ply", vertices, faces, normals)]
+
+
+#: A torus has no Mitsuba shape: it becomes a smooth mesh of TORUS_SEGMENTS x TORUS_SEGMENTS / 2
+#: quads (around the ring, around the tube). The mesh lies inside the true torus by at most the
+#: sagitta (R + r)(1 - cos(pi / N)) ~ 1.9e-5 (R + r) for N = 512: silhouettes move by far less
+#: than a pixel. Its interpolated normals would be off by up to ~(pi/N)^2 / 8 rad, which a Phong
+#: exponent of 40 makes ~1e-3 in value; the integrator therefore uses the true torus's normal
+#: (its BSDF carries centre, axis and radii), and the expected difference is confined to
+#: silhouettes and the terminator, where the facets and the true surface disagree.
+TORUS_SEGMENTS = 512
+
+
+def tessellate_torus(obj: Torus) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """World-space vertices, faces (outward, counter-clockwise) and exact vertex normals."""
+    n_ring, n_tube = TORUS_SEGMENTS, TORUS_SEGMENTS // 2
+    u = np.linspace(0, 2 * np.pi, n_ring, endpoint=False)
+    v = np.linspace(0, 2 * np.pi, n_tube, endpoint=False)
+    uu, vv = np.meshgrid(u, v, indexing="ij")
+    R, r = obj.major_radius, obj.minor_radius
+    normal = np.stack([np.cos(vv) * np.cos(uu), np.cos(vv) * np.sin(uu), np.sin(vv)], -1)
+    ring = np.stack([R * np.cos(uu), R * np.sin(uu), np.zeros_like(uu)], -1)
+    points = (ring + r * normal).reshape(-1, 3)
+    normal = normal.reshape(-1, 3)
+    i, j = np.meshgrid(np.arange(n_ring), np.arange(n_tube), indexing="ij")
+    a = i * n_tube + j
+    b = ((i + 1) % n_ring) * n_tube + j
+    c = ((i + 1) % n_ring) * n_tube + (j + 1) % n_tube
+    dd = i * n_tube + (j + 1) % n_tube
+    faces = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3),
+                            np.stack([a, c, dd], -1).reshape(-1, 3)]).astype(np.int32)  # fmt: skip
+    m = to_world(obj)
+    points = points @ m[:3, :3].T + m[:3, 3]
+    normal = normal @ np.linalg.inv(m[:3, :3])
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    return points, faces, normal
+
+
+def _ply(path: Path, vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray | None) -> dict:
+    """Write a binary PLY (with vertex normals where smooth) and the Mitsuba shape reading it."""
+    import trimesh
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    mesh = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
+    if normals is not None:
+        mesh.vertex_normals = normals
+    data = trimesh.exchange.ply.export_ply(mesh, encoding="binary",
+                                           vertex_normal=normals is not None)  # fmt: skip
+    with atomic_path(path) as tmp:
+        tmp.write_bytes(data)
+    return {"type": "ply", "filename": str(path), "face_normals": normals is None}
+
+
+_mesh_dir: Path | None = None
+
+
+def _process_mesh_dir() -> Path:
+    global _mesh_dir
+    if _mesh_dir is None:
+        import atexit
+        import shutil
+        import tempfile
+
+        _mesh_dir = Path(tempfile.mkdtemp(prefix="rtlab-mitsuba-"))
+        atexit.register(shutil.rmtree, _mesh_dir, True)
+    return _mesh_dir
+
+
+# --------------------------------------------------------------------------- XML
+
+#: The XML element of each plugin type this converter emits.
+_TAGS = {
+    PLUGIN: "integrator", MATERIAL_PLUGIN: "bsdf", "perspective": "sensor",
+    "stratified": "sampler", "independent": "sampler", "hdrfilm": "film", "box": "rfilter",
+    "point": "emitter", "directional": "emitter", "sphere": "shape", "disk": "shape",
+    "cube": "shape", "cylinder": "shape", "ply": "shape",
+}  # fmt: skip
+
+
+def _xml_value(name: str, value: Any, indent: str, base: Path | None) -> list[str]:
+    if isinstance(value, dict):
+        ident = f' id="{name}"' if name.startswith(("object_", "light_")) else ""
+        lines = [f'{indent}<{_TAGS[value["type"]]} type="{value["type"]}"{ident}>']
+        for key, item in value.items():
+            if key != "type":
+                lines += _xml_value(key, item, indent + "  ", base)
+        return [*lines, f"{indent}</{_TAGS[value['type']]}>"]
+    if isinstance(value, bool):
+        return [f'{indent}<boolean name="{name}" value="{str(value).lower()}"/>']
+    if isinstance(value, int):
+        return [f'{indent}<integer name="{name}" value="{value}"/>']
+    if isinstance(value, float):
+        return [f'{indent}<float name="{name}" value="{_f(value)}"/>']
+    if isinstance(value, str):
+        if name == "filename" and base is not None:  # relative to the XML file
+            value = os.path.relpath(value, base)
+        return [f"{indent}<string name={quoteattr(name)} value={quoteattr(value)}/>"]
+    if isinstance(value, mi.ScalarColor3f):
+        return [f'{indent}<rgb name="{name}" value="{_v(value)}"/>']
+    if isinstance(value, mi.ScalarPoint3f):
+        return [f'{indent}<point name="{name}" value="{_v(value)}"/>']
+    if isinstance(value, mi.ScalarVector3f):
+        return [f'{indent}<vector name="{name}" value="{_v(value)}"/>']
+    if isinstance(value, mi.ScalarTransform4f):
+        matrix = " ".join(_f(x) for x in np.array(value.matrix, dtype=np.float64).ravel())
+        return [f'{indent}<transform name="{name}"><matrix value="{matrix}"/></transform>']
+    raise TypeError(f"cannot write {name}={value!r} to Mitsuba XML")
 
 
 def _f(x: float) -> str:
@@ -443,93 +631,24 @@ def _v(v: Any) -> str:
     return ", ".join(_f(x) for x in v)
 
 
-def to_mitsuba_xml(scene: Scene) -> str:
-    """The scene as Mitsuba 3 XML; loads with ``mi.load_file`` once this module is imported."""
-    cam, ren = scene.camera, scene.render
-    sampler = _sampler(scene)
-    sampler_xml = f'    <sampler type="{sampler["type"]}">\n'
-    sampler_xml += f'      <integer name="sample_count" value="{sampler["sample_count"]}"/>\n'
-    if "jitter" in sampler:
-        sampler_xml += '      <boolean name="jitter" value="false"/>\n'
-    if "seed" in sampler:
-        sampler_xml += f'      <integer name="seed" value="{sampler["seed"]}"/>\n'
-    sampler_xml += "    </sampler>\n"
-    out = [
+def write_mitsuba_xml(scene: Scene, path: str | os.PathLike[str]) -> Path:
+    """The scene as Mitsuba 3 XML, with its meshes as PLY files in ``<name>-meshes/`` beside it;
+    ``mi.load_file`` reads it in any process that has imported this module."""
+    path = Path(path)
+    d = to_mitsuba_dict(scene, mesh_dir=path.parent / f"{path.stem}-meshes")
+    lines = [
         f"<!-- Converted by rtlab from {quoteattr(scene.source)[1:-1]}: the classic model.",
         "     Load it with mi.load_file in a process that has imported converters.mitsuba,",
         f'     which registers the "{PLUGIN}" integrator and "{MATERIAL_PLUGIN}" BSDF. -->',
         '<scene version="3.0.0">',
-        f'  <integrator type="{PLUGIN}">',
-        f'    <integer name="max_depth" value="{ren.max_depth}"/>',
-        f'    <float name="min_coefficient" value="{_f(ren.min_coefficient)}"/>',
-        f'    <rgb name="background" value="{_v(ren.background)}"/>',
-        f'    <rgb name="ambient_light" value="{_v(ren.ambient_light)}"/>',
-        "  </integrator>",
-        '  <sensor type="perspective">',
-        f'    <float name="fov" value="{_f(cam.fov_y)}"/>',
-        '    <string name="fov_axis" value="y"/>',
-        '    <transform name="to_world">',
-        f'      <lookat origin="{_v(cam.eye)}" target="{_v(cam.look_at)}" up="{_v(cam.up)}"/>',
-        "    </transform>",
-        sampler_xml.rstrip("\n"),
-        '    <film type="hdrfilm">',
-        f'      <integer name="width" value="{cam.width}"/>',
-        f'      <integer name="height" value="{cam.height}"/>',
-        '      <rfilter type="box"/>',
-        '      <string name="pixel_format" value="rgb"/>',
-        '      <string name="component_format" value="float32"/>',
-        "    </film>",
-        "  </sensor>",
     ]
-    for i, light in enumerate(scene.lights):
-        if isinstance(light, PointLight):
-            out += [
-                f'  <emitter type="point" id="light_{i}">',
-                f'    <point name="position" value="{_v(light.position)}"/>',
-                f'    <rgb name="intensity" value="{_v(light.color)}"/>',
-                "  </emitter>",
-            ]
-        elif isinstance(light, DirectionalLight):
-            out += [
-                f'  <emitter type="directional" id="light_{i}">',
-                f'    <vector name="direction" value="{_v(light.direction)}"/>',
-                f'    <rgb name="irradiance" value="{_v(light.color)}"/>',
-                "  </emitter>",
-            ]
-    half = PLANE_SCALE * scene_size(scene)
-    for i, obj in enumerate(scene.objects):
-        m = scene.materials[obj.material]
-        if isinstance(obj, Sphere):
-            out += [
-                f'  <shape type="sphere" id="object_{i}">',
-                f'    <point name="center" value="{_v(obj.center)}"/>',
-                f'    <float name="radius" value="{_f(obj.radius)}"/>',
-            ]
-        else:
-            matrix = " ".join(_f(x) for x in plane_matrix(obj, half, cam.eye).ravel())
-            out += [
-                f'  <shape type="disk" id="object_{i}">  <!-- a plane -->',
-                f'    <transform name="to_world"><matrix value="{matrix}"/></transform>',
-            ]
-        out += [
-            f'    <bsdf type="{MATERIAL_PLUGIN}">  <!-- material {quoteattr(obj.material)} -->',
-            f'      <rgb name="color" value="{_v(m.color)}"/>',
-            f'      <float name="ambient" value="{_f(m.ambient)}"/>',
-            f'      <float name="diffuse" value="{_f(m.diffuse)}"/>',
-            f'      <float name="specular" value="{_f(m.specular)}"/>',
-            f'      <float name="shininess" value="{_f(m.shininess)}"/>',
-            f'      <float name="reflectivity" value="{_f(m.reflectivity)}"/>',
-            "    </bsdf>",
-            "  </shape>",
-        ]
-    out.append("</scene>")
-    return "\n".join(out) + "\n"
-
-
-def write_mitsuba_xml(scene: Scene, path: str | os.PathLike[str]) -> Path:
+    for key, value in d.items():
+        if key != "type":
+            lines += _xml_value(key, value, "  ", path.parent.resolve())
+    lines.append("</scene>")
     with atomic_path(path) as tmp:
-        tmp.write_text(to_mitsuba_xml(scene))
-    return Path(path)
+        tmp.write_text("\n".join(lines) + "\n")
+    return path
 
 
 def horizontal_fov(fov_y: float, width: int, height: int) -> float:

@@ -22,8 +22,25 @@ import math
 import os
 from pathlib import Path
 
+import numpy as np
+
 from tracer.image import atomic_path
-from tracer.scene import DirectionalLight, Plane, PointLight, Scene, Sphere
+from tracer.scene import (
+    Box,
+    Cylinder,
+    DirectionalLight,
+    Mesh,
+    Plane,
+    PointLight,
+    Quad,
+    Scene,
+    Sphere,
+    Torus,
+    Triangle,
+    scene_extent,
+    to_world,
+    triangles,
+)
 
 
 def _num(x: float) -> str:
@@ -38,22 +55,6 @@ def _vec(v: tuple[float, float, float] | list[float]) -> str:
 def horizontal_angle(fov_y: float, width: int, height: int) -> float:
     """POV-Ray's ``angle`` (horizontal, degrees) for a vertical field of view."""
     return math.degrees(2 * math.atan(width / height * math.tan(math.radians(fov_y) / 2)))
-
-
-def _scene_extent(scene: Scene) -> float:
-    """A length bigger than the whole scene, to put parallel lights beyond it."""
-    points = [scene.camera.eye, scene.camera.look_at]
-    size = 1.0
-    for obj in scene.objects:
-        if isinstance(obj, Sphere):
-            points.append(obj.center)
-            size = max(size, obj.radius)
-        elif isinstance(obj, Plane):
-            points.append(obj.point)
-    for light in scene.lights:
-        if isinstance(light, PointLight):
-            points.append(light.position)
-    return size + max(max(abs(c) for c in p) for p in points)
 
 
 def to_povray(scene: Scene) -> str:
@@ -79,7 +80,7 @@ def to_povray(scene: Scene) -> str:
         f"  look_at {_vec(cam.look_at)}",
         "}",
     ]
-    far = 1.0e4 * _scene_extent(scene)
+    far = 1.0e4 * scene_extent(scene)
     for light in scene.lights:
         if isinstance(light, PointLight):
             out.append(f"light_source {{ {_vec(light.position)} color rgb {_vec(light.color)} }}")
@@ -114,7 +115,54 @@ def to_povray(scene: Scene) -> str:
             n = obj.normal
             dist = sum(a * b for a, b in zip(n, obj.point, strict=True))
             out.append(f"plane {{ {_vec(n)}, {_num(dist)} {tex} }}  // objects[{i}]")
+        elif isinstance(obj, Box):
+            placed = f" {_matrix(to_world(obj))}" if obj.transform is not None else ""
+            out.append(f"box {{ {_vec(obj.min)}, {_vec(obj.max)} {tex}{placed} }}  // objects[{i}]")
+        elif isinstance(obj, Cylinder):
+            # POV-Ray's cylinder is given by base and top like ours; only the user transform
+            # remains to apply.
+            placed = f" {_matrix(obj.transform.matrix)}" if obj.transform is not None else ""
+            cap = "" if obj.capped else " open"
+            out.append(
+                f"cylinder {{ {_vec(obj.base)}, {_vec(obj.top)}, {_num(obj.radius)}{cap} {tex}"
+                f"{placed} }}  // objects[{i}]"
+            )
+        elif isinstance(obj, Torus):
+            # POV-Ray's torus lies around its y axis; a quarter turn about x takes y to our z.
+            y_to_z = np.array([[1, 0, 0, 0], [0, 0, -1, 0], [0, 1, 0, 0], [0, 0, 0, 1]], float)
+            out.append(
+                f"torus {{ {_num(obj.major_radius)}, {_num(obj.minor_radius)} sturm {tex} "
+                f"{_matrix(to_world(obj) @ y_to_z)} }}  // objects[{i}]"
+            )
+        elif isinstance(obj, Triangle | Quad | Mesh):
+            out.append(_mesh2(*triangles(obj), tex, i))
     return "\n".join(out) + "\n"
+
+
+def _matrix(m: np.ndarray) -> str:
+    """A 4x4 object-to-world matrix (column vectors, p' = A p + t) as POV-Ray's ``matrix``,
+    which multiplies row vectors: its rows are A's columns, then t."""
+    a = m[:3, :3]
+    values = [*a[:, 0], *a[:, 1], *a[:, 2], *m[:3, 3]]
+    return "matrix <" + ", ".join(_num(v) for v in values) + ">"
+
+
+def _mesh2(vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray | None, tex: str,
+           index: int) -> str:  # fmt: skip
+    """A triangle mesh as POV-Ray's mesh2; with vertex normals where the mesh is smooth."""
+    lines = [f"mesh2 {{  // objects[{index}]", f"  vertex_vectors {{ {len(vertices)},"]
+    lines.append(",\n".join(f"    {_vec(v)}" for v in vertices))
+    lines.append("  }")
+    if normals is not None:
+        lines.append(f"  normal_vectors {{ {len(normals)},")
+        lines.append(",\n".join(f"    {_vec(n)}" for n in normals))
+        lines.append("  }")
+    lines.append(f"  face_indices {{ {len(faces)},")
+    lines.append(",\n".join(f"    <{a}, {b}, {c}>" for a, b, c in faces))
+    lines.append("  }")
+    lines.append(f"  {tex}")
+    lines.append("}")
+    return "\n".join(lines)
 
 
 def _safe(name: str) -> str:

@@ -27,6 +27,12 @@ MITSUBA_TOLERANCE = 1e-4
 # hit or miss in different precision (float32 in Mitsuba, double with other epsilons in
 # POV-Ray): such pixels may differ by a whole colour. Their share is bounded, not excused.
 MAX_SHARE_OVER = 0.0005
+# Mitsuba has no torus; converters.mitsuba tessellates it (512 x 256 quads). Hits and normals are
+# moved onto the true torus, but whether a grazing ray meets the facets or the true surface can
+# differ. A thin torus whose tube is narrower than a pixel (reference/scenes/torus_cylinder.toml:
+# 0.02 units wide, a pixel spans 0.03) is all silhouette, and so is its shadow: measured, 32 of
+# 19,200 pixels (0.17%) there. The bound for scenes with tori against Mitsuba is 0.3%.
+MAX_SHARE_TESSELLATED = 0.003
 
 
 @dataclass(frozen=True)
@@ -110,8 +116,10 @@ def over_tolerance(reference: Image, test: Image, tolerance: float | Image) -> n
     return np.any(np.abs(ref - tst) > tolerance, axis=-1)
 
 
-def agrees(reference: Image, test: Image, tolerance: float | Image) -> tuple[bool, str]:
-    """The regression rule: pixels over ``tolerance`` make up at most MAX_SHARE_OVER."""
+def agrees(
+    reference: Image, test: Image, tolerance: float | Image, max_share: float = MAX_SHARE_OVER
+) -> tuple[bool, str]:
+    """The regression rule: pixels over ``tolerance`` make up at most ``max_share``."""
     mask = over_tolerance(reference, test, tolerance)
     share = float(mask.mean())
     err = np.max(np.abs(np.asarray(reference, np.float64) - np.asarray(test, np.float64)))
@@ -119,7 +127,7 @@ def agrees(reference: Image, test: Image, tolerance: float | Image) -> tuple[boo
         f"{int(mask.sum())} of {mask.size} pixels ({100 * share:.3f}%) over tolerance, "
         f"max abs error {err:.3g}"
     )
-    return share <= MAX_SHARE_OVER, text
+    return share <= max_share, text
 
 
 def compare(reference: Image, test: Image, tolerance: float | Image = 1e-4) -> Comparison:

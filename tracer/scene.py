@@ -486,7 +486,9 @@ def _mesh(
         if "vertices" in t or "faces" in t:
             raise r.fail(f"{path}.file", "expected either file or vertices and faces, not both")
         file = r.string(t, path, "file", required=True)
-        vertices, faces = _read_mesh_file(r, f"{path}.file", base_dir / file)
+        vertices, faces = _read_mesh_file(
+            r, f"{path}.file", resolve_file(r, f"{path}.file", file, base_dir)
+        )
     else:
         if "vertices" not in t or "faces" not in t:
             missing = "vertices" if "vertices" not in t else "faces"
@@ -499,6 +501,24 @@ def _mesh(
     normals = vertex_normals(vertices, faces) if smooth else None
     return Mesh(vertices=vertices, faces=faces, material=material, smooth=smooth,
                 normals=normals, file=file, transform=transform)  # fmt: skip
+
+
+def resolve_file(r: _Reader | None, key: str, name: str, base_dir: Path) -> Path:
+    """A file named in a scene: relative to the scene file's directory, or, written
+    ``package:NAME/path``, inside the installed Python package NAME (data that ships in a
+    wheel, such as the Stanford bunny in pymeshfix, is read where it is installed)."""
+    if not name.startswith("package:"):
+        return base_dir / name
+    package, _, inner = name[len("package:") :].partition("/")
+    import importlib.util
+
+    spec = importlib.util.find_spec(package) if package.isidentifier() else None
+    if spec is None or not spec.submodule_search_locations:
+        message = f"no installed Python package {package!r} (from {name!r})"
+        if r is None:
+            raise FileNotFoundError(message)
+        raise r.fail(key, message)
+    return Path(next(iter(spec.submodule_search_locations))) / inner
 
 
 def _read_mesh_file(r: _Reader, key: str, file: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -769,7 +789,7 @@ def _unparse(scene: Scene) -> dict[str, Any]:
         if isinstance(obj, Mesh):
             d: dict[str, Any] = {"type": "mesh", "material": obj.material, "smooth": obj.smooth}
             if obj.file is not None:
-                d["file"] = str(scene.base_dir / obj.file)
+                d["file"] = str(resolve_file(None, "", obj.file, scene.base_dir))
                 if obj.transform is not None:
                     d["transform"] = obj.transform.to_dict()
             else:  # the vertices as they are now, the transform already applied
@@ -842,3 +862,35 @@ def triangles(obj: Triangle | Quad | Mesh) -> tuple[np.ndarray, np.ndarray, np.n
         m = obj.transform.matrix
         v = v @ m[:3, :3].T + m[:3, 3]
     return v, np.array([[0, 1, 2], [0, 2, 3]], dtype=np.int32), None
+
+
+def scene_extent(scene: Scene) -> float:
+    """A length at least as big as the scene around the origin: the largest coordinate of the
+    camera, lights and objects plus the largest object size. Converters use it to put parallel
+    lights and stand-in planes far beyond everything."""
+    points: list[Any] = [scene.camera.eye, scene.camera.look_at]
+    points += [light.position for light in scene.lights if isinstance(light, PointLight)]
+    size = 1.0
+    for obj in scene.objects:
+        if isinstance(obj, Sphere):
+            points.append(obj.center)
+            size = max(size, obj.radius)
+        elif isinstance(obj, Plane):
+            points.append(obj.point)
+        elif isinstance(obj, Triangle | Quad | Mesh):
+            v = triangles(obj)[0]
+            points += [v.min(axis=0), v.max(axis=0)]
+        else:
+            m = to_world(obj)
+            points.append(m[:3, 3])
+            local = (
+                max(np.abs(obj.min).max(), np.abs(obj.max).max())
+                if isinstance(obj, Box)
+                else (
+                    cylinder_height(obj) + obj.radius
+                    if isinstance(obj, Cylinder)
+                    else obj.major_radius + obj.minor_radius
+                )
+            )
+            size = max(size, float(np.abs(m[:3, :3]).max()) * 3 * local)
+    return size + max(float(np.max(np.abs(p))) for p in points)
