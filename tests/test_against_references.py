@@ -24,9 +24,9 @@ from reference.metrics import (
     MITSUBA_TOLERANCE,
     agrees,
 )
-from tracer.scene import Torus
 from reference.mitsuba import run_mitsuba
 from reference.povray import run_povray
+from tracer.scene import Torus
 
 SCENES = sorted(Path(__file__).resolve().parents[1].glob("reference/scenes/*.toml"))
 IDS = [p.stem for p in SCENES]
