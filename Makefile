@@ -6,8 +6,8 @@ PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 # System packages: POV-Ray is a reference renderer; libLLVM 19 runs Mitsuba's llvm_ad_rgb
-# variant (Debian 12's default libLLVM 15 aborts in it).
-APT_PACKAGES := povray libllvm19
+# variant (Debian 12's default libLLVM 15 aborts in it); OSMesa lets pyrender rasterise offscreen.
+APT_PACKAGES := povray libllvm19 libosmesa6
 CPP_SOURCES := CMakeLists.txt pyproject.toml $(wildcard tracer/cpp/*.h tracer/cpp/*.cpp)
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
@@ -35,6 +35,8 @@ $(VENV)/.installed: requirements-dev.txt | system
 	@[ -x $(PY) ] || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
 	$(PY) -m pip install -q -r requirements-dev.txt
+	@# pyrender pins PyOpenGL 3.1.0, whose OSMesa binding fails; 3.1.10 works (pip warns).
+	$(PY) -m pip install -q --no-deps pyopengl==3.1.10
 	@touch $@
 
 # The C++ core, built by scikit-build-core into an editable install; rebuilt when a source changes.

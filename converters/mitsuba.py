@@ -32,6 +32,7 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from converters.tessellate import torus_mesh
 from tracer.image import atomic_path
 from tracer.scene import (
     Box,
@@ -498,14 +499,14 @@ def _shapes(obj: Any, i: int, half: float, eye: Any, meshes: Path, bsdf: dict) -
         side = {"type": "cylinder", "p0": mi.ScalarPoint3f(0, 0, 0),
                 "p1": mi.ScalarPoint3f(0, 0, h), "radius": r}  # fmt: skip
         shapes = [{**side, "to_world": _transform(m)}]
-        if obj.capped:
-            for z in (0.0, h):
-                disc = np.diag([r, r, 1.0, 1.0])
+        if obj.capped:  # a disc's normal is its +z: the base's is turned to face down
+            for z, flip in ((0.0, -1.0), (h, 1.0)):
+                disc = np.diag([r, r * flip, flip, 1.0])
                 disc[2, 3] = z
                 shapes.append({"type": "disk", "to_world": _transform(m @ disc)})
         return shapes
     if isinstance(obj, Torus):
-        vertices, faces, normals = tessellate_torus(obj)
+        vertices, faces, normals = torus_mesh(obj)
         m = to_world(obj)
         axis = m[:3, 2] / np.linalg.norm(m[:3, 2])
         scale = float(np.cbrt(abs(np.linalg.det(m[:3, :3]))))
@@ -517,39 +518,14 @@ def _shapes(obj: Any, i: int, half: float, eye: Any, meshes: Path, bsdf: dict) -
     return [_ply(meshes / f"object_{i}.ply", vertices, faces, normals)]
 
 
-#: A torus has no Mitsuba shape: it becomes a smooth mesh of TORUS_SEGMENTS x TORUS_SEGMENTS / 2
-#: quads (around the ring, around the tube). The mesh lies inside the true torus by at most the
-#: sagitta (R + r)(1 - cos(pi / N)) ~ 1.9e-5 (R + r) for N = 512: silhouettes move by far less
-#: than a pixel. Its interpolated normals would be off by up to ~(pi/N)^2 / 8 rad, which a Phong
-#: exponent of 40 makes ~1e-3 in value; the integrator therefore uses the true torus's normal
-#: (its BSDF carries centre, axis and radii), and the expected difference is confined to
-#: silhouettes and the terminator, where the facets and the true surface disagree.
-TORUS_SEGMENTS = 512
-
-
-def tessellate_torus(obj: Torus) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """World-space vertices, faces (outward, counter-clockwise) and exact vertex normals."""
-    n_ring, n_tube = TORUS_SEGMENTS, TORUS_SEGMENTS // 2
-    u = np.linspace(0, 2 * np.pi, n_ring, endpoint=False)
-    v = np.linspace(0, 2 * np.pi, n_tube, endpoint=False)
-    uu, vv = np.meshgrid(u, v, indexing="ij")
-    R, r = obj.major_radius, obj.minor_radius
-    normal = np.stack([np.cos(vv) * np.cos(uu), np.cos(vv) * np.sin(uu), np.sin(vv)], -1)
-    ring = np.stack([R * np.cos(uu), R * np.sin(uu), np.zeros_like(uu)], -1)
-    points = (ring + r * normal).reshape(-1, 3)
-    normal = normal.reshape(-1, 3)
-    i, j = np.meshgrid(np.arange(n_ring), np.arange(n_tube), indexing="ij")
-    a = i * n_tube + j
-    b = ((i + 1) % n_ring) * n_tube + j
-    c = ((i + 1) % n_ring) * n_tube + (j + 1) % n_tube
-    dd = i * n_tube + (j + 1) % n_tube
-    faces = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3),
-                            np.stack([a, c, dd], -1).reshape(-1, 3)]).astype(np.int32)  # fmt: skip
-    m = to_world(obj)
-    points = points @ m[:3, :3].T + m[:3, 3]
-    normal = normal @ np.linalg.inv(m[:3, :3])
-    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
-    return points, faces, normal
+#: A torus has no Mitsuba shape: converters.tessellate.torus_mesh makes it a smooth mesh of
+#: 512 x 256 quads (around the ring, around the tube), which lies inside the true torus by at
+#: most the sagitta (R + r)(1 - cos(pi / 512)) ~ 1.9e-5 (R + r): silhouettes move by far less
+#: than a pixel. Its facets would bend the normal by up to ~pi/512 and its interpolated normals
+#: by ~(pi/512)^2 / 8, which a Phong exponent of 40 makes up to ~1e-3 in value; so the
+#: integrator moves each hit onto the true torus (its BSDF carries centre, axis and radii) and
+#: shades it there. The expected difference is confined to silhouettes, where a ray that grazes
+#: the true surface can miss the facets or the reverse (reference.metrics.MAX_SHARE_TESSELLATED).
 
 
 def _ply(path: Path, vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray | None) -> dict:
