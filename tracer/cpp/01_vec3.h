@@ -15,7 +15,9 @@ struct Vec3 {
     Vec3() = default;
     constexpr Vec3(double x_, double y_, double z_) : x(x_), y(y_), z(z_) {}
 
-    double operator[](int i) const { return i == 0 ? x : (i == 1 ? y : z); }
+    // Component i: x, y, z are laid out like an array (a standard-layout struct of three
+    // doubles), so this is one load, not two comparisons (the triangle test indexes by axis).
+    double operator[](int i) const { return (&x)[i]; }
     Vec3 operator-() const { return {-x, -y, -z}; }
     Vec3 operator+(const Vec3 &v) const { return {x + v.x, y + v.y, z + v.z}; }
     Vec3 operator-(const Vec3 &v) const { return {x - v.x, y - v.y, z - v.z}; }

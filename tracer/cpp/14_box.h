@@ -17,13 +17,14 @@
 namespace rt {
 
 struct AABB {
-    Vec3 min{infinity, infinity, infinity}, max{-infinity, -infinity, -infinity};
+    Vec3 min{infinity, infinity, infinity}, max{-infinity, -infinity, -infinity}; // adjacent
 
     void extend(const Vec3 &p) {
         min = {std::min(min.x, p.x), std::min(min.y, p.y), std::min(min.z, p.z)};
         max = {std::max(max.x, p.x), std::max(max.y, p.y), std::max(max.z, p.z)};
     }
     void extend(const AABB &b) {
+        if (b.min.x > b.max.x) return; // an empty box adds nothing (its corners are infinite)
         extend(b.min);
         extend(b.max);
     }
@@ -54,6 +55,34 @@ inline bool slab_test(const AABB &box, const Vec3 &o, const Vec3 &inv_d, const I
 }
 
 inline Vec3 reciprocal(const Vec3 &d) { return {1 / d.x, 1 / d.y, 1 / d.z}; }
+
+// The same test for a ray that meets many boxes (the hierarchy): with the signs of 1/d known,
+// the near and far plane of each slab are picked directly instead of swapped (Williams, Barrus,
+// Morley and Shirley, "An Efficient and Robust Ray-Box Intersection Algorithm", 2005).
+struct SlabRay {
+    Vec3 o, inv_d;
+    int near_x, near_y, near_z; // 0: min is the near plane, 1: max is
+    explicit SlabRay(const Ray &ray)
+        : o(ray.o), inv_d(reciprocal(ray.d)), near_x(inv_d.x < 0), near_y(inv_d.y < 0),
+          near_z(inv_d.z < 0) {}
+};
+
+inline bool slab_test(const AABB &box, const SlabRay &r, const Interval &range, double &t_near) {
+    const Vec3 *planes = &box.min; // planes[0] = min, planes[1] = max
+    double tx0 = (planes[r.near_x].x - r.o.x) * r.inv_d.x;
+    double tx1 = (planes[1 - r.near_x].x - r.o.x) * r.inv_d.x * (1 + 2 * gamma(3));
+    double ty0 = (planes[r.near_y].y - r.o.y) * r.inv_d.y;
+    double ty1 = (planes[1 - r.near_y].y - r.o.y) * r.inv_d.y * (1 + 2 * gamma(3));
+    double tz0 = (planes[r.near_z].z - r.o.z) * r.inv_d.z;
+    double tz1 = (planes[1 - r.near_z].z - r.o.z) * r.inv_d.z * (1 + 2 * gamma(3));
+    // As above, comparisons written so that a NaN slab (0 * infinity) leaves t unchanged.
+    double lo = range.min, hi = range.max;
+    lo = tx0 > lo ? tx0 : lo, hi = tx1 < hi ? tx1 : hi;
+    lo = ty0 > lo ? ty0 : lo, hi = ty1 < hi ? ty1 : hi;
+    lo = tz0 > lo ? tz0 : lo, hi = tz1 < hi ? tz1 : hi;
+    t_near = lo;
+    return lo <= hi;
+}
 
 // The box as an object: axis-aligned in its own coordinates, placed by a transform.
 struct Box : Object {

@@ -33,6 +33,7 @@ struct Mesh : Object {
     Acceleration acceleration = Acceleration::bvh;
     std::vector<BVHNode> nodes; // nodes[0] is the root; its box bounds the whole mesh
     std::vector<int> order;     // triangle indices in leaf order
+    std::vector<Vec3> leaf_vertices; // each triangle's three vertices, in leaf order
 
     // -- building -------------------------------------------------------------------------
     AABB triangle_box(int t) const {
@@ -60,6 +61,11 @@ struct Mesh : Object {
             nodes[0].first = 0;
             nodes[0].count = int(order.size());
         }
+        // The vertices each leaf tests, side by side in memory, in the order they are tested.
+        leaf_vertices.resize(3 * order.size());
+        for (size_t i = 0; i < order.size(); ++i)
+            for (size_t k = 0; k < 3; ++k)
+                leaf_vertices[3 * i + k] = vertices[size_t(triangles[size_t(order[i])][k])];
     }
 
     // Surface-area heuristic: the chance that a ray through a box also passes through a box
@@ -113,8 +119,11 @@ struct Mesh : Object {
                 }
             }
         }
+        // Costs in units of one ray/triangle test; a ray/box test (two per inner node visited)
+        // costs about half of one, so an inner node adds bounds.area() * traversal_cost.
+        constexpr double traversal_cost = 1.0;
         double leaf_cost = bounds.area() * count;
-        if (best_axis < 0 || (count <= 16 && leaf_cost <= best_cost)) {
+        if (best_axis < 0 || leaf_cost <= best_cost + bounds.area() * traversal_cost) {
             nodes[size_t(index)].first = first;
             nodes[size_t(index)].count = count;
             return;
@@ -143,40 +152,54 @@ struct Mesh : Object {
                   RayCounts &counts, bool any) const {
         if (nodes.empty()) return false;
         const WatertightRay wr(ray);
-        const Vec3 inv_d = reciprocal(ray.d);
-        const bool negative[3] = {ray.d.x < 0, ray.d.y < 0, ray.d.z < 0};
-        int stack[64], top = 0;
-        int index = 0;
+        const SlabRay sr(ray);
+        double t_near;
+        ++counts.box_tests;
+        if (!slab_test(nodes[0].bounds, sr, range, t_near)) return false;
+        // Children are tested in pairs; the nearer is visited first, the farther waits on the
+        // stack with its entry distance, and is skipped if a hit has come nearer meanwhile.
+        struct Pending {
+            int node;
+            double t_near;
+        } stack[64];
+        int top = 0, index = 0;
         bool found = false;
         for (;;) {
             const BVHNode &node = nodes[size_t(index)];
-            ++counts.box_tests;
-            double t_near, t_far;
-            if (slab_test(node.bounds, ray.o, inv_d, range, t_near, t_far)) {
-                if (node.count > 0) { // a leaf: its triangles
-                    counts.primitive_tests += uint64_t(node.count);
-                    for (int i = node.first; i < node.first + node.count; ++i) {
-                        const std::array<int, 3> &tri = triangles[size_t(order[size_t(i)])];
-                        TriangleHit th;
-                        if (intersect_triangle(vertices[size_t(tri[0])], vertices[size_t(tri[1])],
-                                               vertices[size_t(tri[2])], wr, range, th)) {
-                            best = th;
-                            best_triangle = order[size_t(i)];
-                            range.max = th.t;
-                            found = true;
-                            if (any) return true;
-                        }
+            if (node.count > 0) { // a leaf: its triangles, stored in leaf order
+                counts.primitive_tests += uint64_t(node.count);
+                for (int i = node.first; i < node.first + node.count; ++i) {
+                    const Vec3 *v = &leaf_vertices[3 * size_t(i)];
+                    TriangleHit th;
+                    if (intersect_triangle(v[0], v[1], v[2], wr, range, th)) {
+                        best = th;
+                        best_triangle = order[size_t(i)];
+                        range.max = th.t;
+                        found = true;
+                        if (any) return true;
                     }
-                } else { // visit the child on the ray's near side first
-                    int near = index + 1, far = node.first;
-                    if (negative[node.axis]) std::swap(near, far);
-                    stack[top++] = far;
-                    index = near;
+                }
+            } else {
+                const int left = index + 1, right = node.first;
+                double t_left, t_right;
+                counts.box_tests += 2;
+                bool hit_left = slab_test(nodes[size_t(left)].bounds, sr, range, t_left);
+                bool hit_right = slab_test(nodes[size_t(right)].bounds, sr, range, t_right);
+                if (hit_left && hit_right) {
+                    bool left_first = t_left <= t_right;
+                    stack[top++] = {left_first ? right : left, left_first ? t_right : t_left};
+                    index = left_first ? left : right;
+                    continue;
+                }
+                if (hit_left || hit_right) {
+                    index = hit_left ? left : right;
                     continue;
                 }
             }
+            // Next: the nearest waiting node that still lies before the closest hit.
+            while (top > 0 && stack[top - 1].t_near > range.max) --top;
             if (top == 0) break;
-            index = stack[--top];
+            index = stack[--top].node;
         }
         return found;
     }

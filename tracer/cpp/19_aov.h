@@ -5,6 +5,7 @@
 // `aov` integrator can check without any shading model.
 #pragma once
 
+#include "09_scene.h"
 #include "18_torus.h"
 
 namespace rt {
