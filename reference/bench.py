@@ -16,6 +16,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from tracer.cli import demo_scene_path
 from tracer.image import atomic_path
 from tracer.render import render_with_stats
@@ -70,7 +72,102 @@ def suite_classic(
     return rows
 
 
-SUITES: dict[str, Callable[..., list[dict[str, Any]]]] = {"classic": suite_classic}
+def _camera_rays(scene: Any) -> tuple[np.ndarray, np.ndarray]:
+    """The primary rays through the pixel centres (03_camera.h's formula), as float32 arrays."""
+    cam = scene.camera
+    eye = np.asarray(cam.eye, dtype=np.float64)
+    forward = np.asarray(cam.look_at) - eye
+    forward /= np.linalg.norm(forward)
+    right = np.cross(forward, cam.up)
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    h = 2 * np.tan(np.radians(cam.fov_y) / 2)
+    w = h * cam.width / cam.height
+    x = (np.arange(cam.width) + 0.5) / cam.width - 0.5
+    y = 0.5 - (np.arange(cam.height) + 0.5) / cam.height
+    xx, yy = np.meshgrid(x * w, y * h)
+    d = forward + xx[..., None] * right + yy[..., None] * up
+    d /= np.linalg.norm(d, axis=-1, keepdims=True)
+    d = np.ascontiguousarray(d.reshape(-1, 3), dtype=np.float32)
+    o = np.ascontiguousarray(np.broadcast_to(eye, d.shape), dtype=np.float32)
+    return o, d
+
+
+def suite_geometry(
+    repeats: int = 3, threads: tuple[int, ...] = (1, 2), width: int = 1920, height: int = 1024
+) -> list[dict[str, Any]]:
+    """Primary rays per second on the Stanford bunny (99,785 triangles), closest hit only:
+    rtlab's aov integrator (its hierarchy, double precision, watertight) against Embree's
+    single-ray kernel (embreex, robust=False, float), plus each one's hierarchy build time."""
+    import dataclasses
+    import threading
+    import time
+
+    from embreex import rtcore_scene
+    from embreex.mesh_construction import TriangleMesh
+
+    from tracer.render import to_core
+    from tracer.scene import Mesh
+
+    root = Path(__file__).resolve().parent
+    scene = load_scene(root / "scenes" / "bunny.toml").with_overrides(
+        width=width, height=height, integrator="aov"
+    )
+    # The bunny alone: what Embree is given too.
+    meshes = tuple(o for o in scene.objects if isinstance(o, Mesh))
+    bunny_only = dataclasses.replace(scene, objects=meshes)
+    mesh = meshes[0]
+    case, n_rays = "bunny-primary", width * height
+    rows: list[dict[str, Any]] = []
+
+    def build_rtlab() -> float:
+        start = time.perf_counter()
+        to_core(bunny_only)
+        return time.perf_counter() - start
+
+    triangles_f32 = np.ascontiguousarray(mesh.vertices[mesh.faces], dtype=np.float32)
+
+    def build_embree() -> tuple[Any, float]:
+        start = time.perf_counter()
+        embree = rtcore_scene.EmbreeScene(robust=False)
+        TriangleMesh(embree, triangles_f32)
+        embree.run(np.zeros((1, 3), np.float32), np.array([[0, 0, 1]], np.float32))  # commit
+        return embree, time.perf_counter() - start
+
+    origins, directions = _camera_rays(bunny_only)
+    embree, _ = build_embree()
+
+    def embree_seconds(n: int) -> float:
+        parts = np.array_split(np.arange(n_rays), n)
+        work = [threading.Thread(target=lambda p=p: embree.run(
+            origins[p[0]:p[-1] + 1], directions[p[0]:p[-1] + 1], query="INTERSECT", output=1))
+            for p in parts]  # fmt: skip
+        start = time.perf_counter()
+        for t in work:
+            t.start()
+        for t in work:
+            t.join()
+        return time.perf_counter() - start
+
+    for n in threads:
+        ours = _best(lambda n=n: render_with_stats(bunny_only, threads=n, progress=False).seconds,
+                     2 * repeats + 1)  # fmt: skip
+        theirs = _best(lambda n=n: embree_seconds(n), 2 * repeats + 1)
+        for renderer, seconds in (("rtlab", ours), ("embree", theirs)):
+            rows.append({"case": case, "renderer": renderer, "threads": n,
+                         "metric": "mrays_per_s", "value": n_rays / seconds / 1e6,
+                         "unit": "Mrays/s", "repeats": 2 * repeats + 1})  # fmt: skip
+    for renderer, fn in (("rtlab", build_rtlab), ("embree", lambda: build_embree()[1])):
+        rows.append({"case": "bunny-bvh-build", "renderer": renderer, "threads": 1,
+                     "metric": "seconds", "value": _best(fn, repeats), "unit": "s",
+                     "repeats": repeats, "triangles": len(mesh.faces)})  # fmt: skip
+    return rows
+
+
+SUITES: dict[str, Callable[..., list[dict[str, Any]]]] = {
+    "classic": suite_classic,
+    "geometry": suite_geometry,
+}
 
 
 def run_suites(names: list[str], json_path: str | os.PathLike[str] | None) -> list[dict]:

@@ -85,3 +85,16 @@ def test_bench_rows_have_the_contract_fields():
         r["machine"] = "test"
     text = format_ratios(rows)
     assert "ex25-64x32, 1 thread" in text and "rtlab is" in text
+
+
+def test_geometry_bench_rows_have_the_contract_fields():
+    from reference.bench import suite_geometry
+
+    rows = suite_geometry(repeats=1, threads=(1,), width=64, height=32)
+    primary = [r for r in rows if r["case"] == "bunny-primary"]
+    assert {r["renderer"] for r in primary} == {"rtlab", "embree"}
+    for r in primary:
+        assert r["metric"] == "mrays_per_s" and r["value"] > 0 and r["threads"] == 1
+    builds = [r for r in rows if r["case"] == "bunny-bvh-build"]
+    assert {r["renderer"] for r in builds} == {"rtlab", "embree"}
+    assert all(r["metric"] == "seconds" and r["value"] > 0 for r in builds)

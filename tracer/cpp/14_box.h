@@ -60,21 +60,22 @@ inline Vec3 reciprocal(const Vec3 &d) { return {1 / d.x, 1 / d.y, 1 / d.z}; }
 // the near and far plane of each slab are picked directly instead of swapped (Williams, Barrus,
 // Morley and Shirley, "An Efficient and Robust Ray-Box Intersection Algorithm", 2005).
 struct SlabRay {
-    Vec3 o, inv_d;
+    Vec3 o, inv_d, inv_d_far; // inv_d_far = inv_d (1 + 2 gamma(3)): the far end's widening,
+                              // applied once per ray (one more rounding, inside the margin)
     int near_x, near_y, near_z; // 0: min is the near plane, 1: max is
     explicit SlabRay(const Ray &ray)
-        : o(ray.o), inv_d(reciprocal(ray.d)), near_x(inv_d.x < 0), near_y(inv_d.y < 0),
-          near_z(inv_d.z < 0) {}
+        : o(ray.o), inv_d(reciprocal(ray.d)), inv_d_far(inv_d * (1 + 2 * gamma(3))),
+          near_x(inv_d.x < 0), near_y(inv_d.y < 0), near_z(inv_d.z < 0) {}
 };
 
 inline bool slab_test(const AABB &box, const SlabRay &r, const Interval &range, double &t_near) {
     const Vec3 *planes = &box.min; // planes[0] = min, planes[1] = max
     double tx0 = (planes[r.near_x].x - r.o.x) * r.inv_d.x;
-    double tx1 = (planes[1 - r.near_x].x - r.o.x) * r.inv_d.x * (1 + 2 * gamma(3));
+    double tx1 = (planes[1 - r.near_x].x - r.o.x) * r.inv_d_far.x;
     double ty0 = (planes[r.near_y].y - r.o.y) * r.inv_d.y;
-    double ty1 = (planes[1 - r.near_y].y - r.o.y) * r.inv_d.y * (1 + 2 * gamma(3));
+    double ty1 = (planes[1 - r.near_y].y - r.o.y) * r.inv_d_far.y;
     double tz0 = (planes[r.near_z].z - r.o.z) * r.inv_d.z;
-    double tz1 = (planes[1 - r.near_z].z - r.o.z) * r.inv_d.z * (1 + 2 * gamma(3));
+    double tz1 = (planes[1 - r.near_z].z - r.o.z) * r.inv_d_far.z;
     // As above, comparisons written so that a NaN slab (0 * infinity) leaves t unchanged.
     double lo = range.min, hi = range.max;
     lo = tx0 > lo ? tx0 : lo, hi = tx1 < hi ? tx1 : hi;
