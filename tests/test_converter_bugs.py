@@ -90,3 +90,37 @@ def test_a_wrong_mitsuba_conversion_fails(scene_and_image, bug):
     result = run_mitsuba(scene, variant="llvm_ad_rgb", warm=False, edit=MITSUBA_BUGS[bug])
     ok, text = agrees(result.image, ours, MITSUBA_TOLERANCE)
     assert not ok, f"{bug} went unnoticed: {text}"
+
+
+GEOMETRY = Path(__file__).resolve().parents[1] / "reference" / "scenes"
+
+
+def test_a_wrong_geometry_conversion_fails():
+    """Geometry converters too: a torus left lying in POV-Ray's own xz plane, a mesh whose
+    smooth normals are dropped, and a box given Mitsuba's cube without its scale each fail."""
+    tori = tracer.load_scene(GEOMETRY / "torus_cylinder.toml").with_overrides(width=96, height=72)
+    ours = tracer.render(tori, threads=2)
+    sdl = to_povray(tori)
+    wrong = re.sub(r"(torus \{[^}]*?sturm texture \{ \w+ \}) matrix <[^>]*>", r"\1", sdl, count=1)
+    assert wrong != sdl
+    pov = run_povray(tori, threads=2, sdl=wrong)
+    assert not agrees(pov.image, ours, pov.error_bound + FLOAT32_SLACK)[0]
+
+    smooth = tracer.load_scene(GEOMETRY / "bunny_smooth.toml").with_overrides(width=96, height=72)
+    ours = tracer.render(smooth, threads=2)
+    sdl = to_povray(smooth)
+    wrong = re.sub(r"  normal_vectors \{.*?\n  \}\n", "", sdl, count=1, flags=re.S)
+    assert wrong != sdl
+    pov = run_povray(smooth, threads=2, sdl=wrong)
+    assert not agrees(pov.image, ours, pov.error_bound + FLOAT32_SLACK)[0]
+
+    boxes = tracer.load_scene(GEOMETRY / "boxes_triangles.toml").with_overrides(width=96, height=72)
+    ours = tracer.render(boxes, threads=2)
+
+    def unscaled_cube(d):
+        import mitsuba as mi
+
+        d["object_1"]["to_world"] = mi.ScalarTransform4f().translate([0.3, -0.55, 0.15])
+
+    result = run_mitsuba(boxes, variant="llvm_ad_rgb", warm=False, edit=unscaled_cube)
+    assert not agrees(result.image, ours, MITSUBA_TOLERANCE)[0]
