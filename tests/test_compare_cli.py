@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 import tracer
 from reference.bench import format_ratios, suite_classic
@@ -27,11 +28,16 @@ def test_convert_writes_povray_sdl(tmp_path, capsys):
     assert "povray +I" in capsys.readouterr().out
 
 
-def test_mitsuba_xml_loads_in_a_fresh_process_and_renders_the_same(tmp_path):
-    """The XML written by `convert` loads with mi.load_file in any process that imported
-    converters.mitsuba, and renders what the dict conversion renders."""
+@pytest.mark.parametrize("name", ["shadows", "torus_cylinder", "boxes_triangles"])
+def test_mitsuba_xml_loads_in_a_fresh_process_and_renders_the_same(tmp_path, name):
+    """The XML written by `convert` (with its meshes as PLY files beside it) loads with
+    mi.load_file in any process that imported converters.mitsuba, and renders what the dict
+    conversion renders."""
+    source = ROOT / "reference" / "scenes" / f"{name}.toml"
     xml = tmp_path / "s.xml"
-    assert main(["convert", str(SHADOWS), "--to", "mitsuba", "-o", str(xml), "--quiet"]) == 0
+    args = ["convert", str(source), "--to", "mitsuba", "-o", str(xml), "--quiet",
+            "--width", "80", "--height", "60"]  # fmt: skip
+    assert main(args) == 0
     npy = tmp_path / "xml.npy"
     code = (
         "import sys, numpy as np, mitsuba as mi, converters.mitsuba as cm\n"
@@ -42,7 +48,7 @@ def test_mitsuba_xml_loads_in_a_fresh_process_and_renders_the_same(tmp_path):
     subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT, capture_output=True)
     from reference.mitsuba import run_mitsuba
 
-    scene = tracer.load_scene(SHADOWS)
+    scene = tracer.load_scene(source).with_overrides(width=80, height=60)
     from_dict = run_mitsuba(scene, variant="llvm_ad_rgb", warm=False).image
     # Not bit for bit: the XML parser builds the camera transform from text in its own float32
     # steps. The same float32 argument as for any Mitsuba comparison applies.
