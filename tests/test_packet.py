@@ -13,7 +13,12 @@ import pytest
 import tracer
 from tests.conftest import material, scene_dict, sphere
 
-SCENES = sorted(Path(__file__).resolve().parents[1].glob("reference/scenes/*.toml"))
+# The classic-model scenes (the path-traced ones are checked statistically, tests/test_path*).
+SCENES = [
+    p
+    for p in sorted(Path(__file__).resolve().parents[1].glob("reference/scenes/*.toml"))
+    if tracer.load_scene(p).render.integrator == "classic"
+]
 
 
 def both(scene):

@@ -61,7 +61,7 @@ def to_core(scene: Scene) -> _core.Scene:
     index = {}
     for name, m in scene.materials.items():
         index[name] = core.add_material(
-            m.color, m.ambient, m.diffuse, m.specular, m.shininess, m.reflectivity
+            m.color, m.ambient, m.diffuse, m.specular, m.shininess, m.reflectivity, m.emission
         )
     for light in scene.lights:
         if isinstance(light, PointLight):
@@ -138,7 +138,8 @@ def render_with_stats(
     start = time.perf_counter()
     try:
         aov = scene.render.integrator == "aov"
-        image, rays = _core.render(core, threads, callback, packets, aov)
+        path = scene.render.integrator == "path"
+        image, rays = _core.render(core, threads, callback, packets, aov, path)
     finally:
         close()
     return RenderResult(image, dict(rays), time.perf_counter() - start, threads)

@@ -26,7 +26,7 @@ Color = tuple[float, float, float]
 MAX_IMAGE_SIDE = 32768
 MAX_SPP = 1 << 20
 MAX_DEPTH = 10000
-INTEGRATORS = ("classic", "aov")
+INTEGRATORS = ("classic", "aov", "path")
 ACCELERATIONS = ("bvh", "bounding_box", "none")
 
 
@@ -53,7 +53,7 @@ class Camera:
 
 @dataclass(frozen=True)
 class RenderSettings:
-    integrator: str = "classic"  # or "aov": depth, object id and normal per pixel
+    integrator: str = "classic"  # "aov": depth, object id and normal; "path": path tracing
     max_depth: int = 5  # the primary ray is level 1
     min_coefficient: float = 0.0  # a level whose chain coefficient is below this is black
     spp: int = 1
@@ -76,6 +76,9 @@ class Material:
     specular: float = 0.0
     shininess: float = 40.0
     reflectivity: float = 0.0
+    #: Radiance leaving the front side (the path tracer's area lights; the classic model has
+    #: no emitting surfaces and ignores it).
+    emission: Color = (0.0, 0.0, 0.0)
 
 
 @dataclass(frozen=True)
@@ -364,6 +367,7 @@ def _materials(r: _Reader, data: Any) -> dict[str, Material]:
             specular=r.number(m, path, "specular", default=d.specular, low=0),
             shininess=r.number(m, path, "shininess", default=d.shininess, above=0),
             reflectivity=r.number(m, path, "reflectivity", default=d.reflectivity, low=0),
+            emission=r.color(m, path, "emission", default=d.emission),
         )
     return out
 

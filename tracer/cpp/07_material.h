@@ -12,6 +12,7 @@ struct Material {
     double specular = 0;       // Phong coefficient; the highlight is the light's colour
     double shininess = 40;     // Phong exponent
     double reflectivity = 0;   // alpha, the mirror coefficient in the chain
+    Color emission{0, 0, 0};   // radiance from the front side (the path tracer's area lights)
 };
 
 } // namespace rt

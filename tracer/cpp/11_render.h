@@ -83,7 +83,8 @@ inline void render_tile_rays(const Scene &scene, int x0, int y0, int x1, int y1,
             store_pixel(out, scene.camera.width, i, j, render_pixel(scene, i, j, counts));
 }
 
-using TileRenderer = void (*)(const Scene &, int, int, int, int, float *, RayCounts &);
+using TileRenderer =
+    std::function<void(const Scene &, int, int, int, int, float *, RayCounts &)>;
 
 struct RenderResult {
     RayCounts counts;
@@ -95,7 +96,7 @@ struct RenderResult {
 // when poll returns false the workers stop after their current tile.
 inline RenderResult render(const Scene &scene, int threads, float *out,
                            const std::function<bool(int, int)> &poll,
-                           TileRenderer render_tile = render_tile_rays,
+                           const TileRenderer &render_tile = render_tile_rays,
                            std::chrono::milliseconds poll_interval = std::chrono::milliseconds(100)) {
     constexpr int tile = 16;
     const int W = scene.camera.width, H = scene.camera.height;

@@ -9,13 +9,14 @@
 #include <nanobind/stl/vector.h>
 
 #include <array>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <tuple>
 
 #include "12_packet.h"
-#include "19_aov.h"
+#include "20_path.h"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -73,7 +74,8 @@ static rt::Transform transform_from(const std::optional<Matrix34> &m) {
 // Render with the GIL released. Every 100 ms the watching thread takes the GIL to check for
 // Ctrl-C and to report progress; an exception from either cancels the render and is re-raised.
 static std::tuple<Image, nb::dict> render(const rt::Scene &scene, int threads,
-                                          nb::object progress, bool packets, bool aov) {
+                                          nb::object progress, bool packets, bool aov,
+                                          bool path) {
     const int W = scene.camera.width, H = scene.camera.height;
     const size_t channels = aov ? rt::aov_channels : 3;
     // Not zeroed: every pixel is written (a cancelled render raises instead of returning).
@@ -105,6 +107,12 @@ static std::tuple<Image, nb::dict> render(const rt::Scene &scene, int threads,
         rt::TileRenderer tiles = aov           ? rt::render_tile_aov
                                  : use_packets ? rt::render_tile_packets
                                                : rt::render_tile_rays;
+        std::unique_ptr<rt::PathContext> context;
+        if (path) {
+            context = std::make_unique<rt::PathContext>(scene);
+            tiles = [&](const rt::Scene &, int x0, int y0, int x1, int y1, float *out,
+                        rt::RayCounts &c) { rt::render_tile_path(*context, x0, y0, x1, y1, out, c); };
+        }
         result = rt::render(scene, threads, data, poll, tiles);
     }
     if (failed) throw nb::python_error();
@@ -147,12 +155,13 @@ NB_MODULE(_core, m) {
         .def(
             "add_material",
             [](rt::Scene &s, Triple color, double ambient, double diffuse, double specular,
-               double shininess, double reflectivity) {
-                s.materials.push_back(
-                    {col(color), ambient, diffuse, specular, shininess, reflectivity});
+               double shininess, double reflectivity, Triple emission) {
+                s.materials.push_back({col(color), ambient, diffuse, specular, shininess,
+                                       reflectivity, col(emission)});
                 return int(s.materials.size()) - 1;
             },
-            "color"_a, "ambient"_a, "diffuse"_a, "specular"_a, "shininess"_a, "reflectivity"_a)
+            "color"_a, "ambient"_a, "diffuse"_a, "specular"_a, "shininess"_a, "reflectivity"_a,
+            "emission"_a = Triple{0, 0, 0})
         .def(
             "add_point_light",
             [](rt::Scene &s, Triple position, Triple color) {
@@ -285,7 +294,7 @@ NB_MODULE(_core, m) {
             "origin"_a, "direction"_a, "The classic colour seen along one ray.");
 
     m.def("render", &render, "scene"_a, "threads"_a, "progress"_a = nb::none(),
-          "packets"_a = true, "aov"_a = false,
+          "packets"_a = true, "aov"_a = false, "path"_a = false,
           "Render to a float32 (height, width, 3) array; also returns the ray counts. "
           "packets=False traces one ray at a time (10_classic.h) instead of W at a time "
           "(12_packet.h); the images are the same.");

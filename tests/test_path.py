@@ -1,0 +1,159 @@
+"""The path tracer against analytic answers: furnaces (where every path's expectation is
+known), inverse-square point lights, directional irradiance, mirrors, max_depth as Mitsuba
+counts it, and the same image whatever the thread count.
+
+Statistical checks compare a mean over many pixels, whose expectation is the analytic value,
+with its standard error from the pixels' own spread: |mean - expected| < 4.5 standard errors
+(a false alarm about once in 150,000 runs for a normal mean; far more than a 1% bias at these
+sample counts)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+import tracer
+from tests.conftest import material, plane, scene_dict, sphere
+
+Z = 4.5
+
+
+def path_scene(**parts):
+    data = scene_dict(**parts)
+    data["render"] = {"integrator": "path", "spp": 16, "max_depth": 10, **parts.get("render", {})}
+    return tracer.load_scene(data)
+
+
+def check_mean(values, expected):
+    values = np.asarray(values, dtype=np.float64).ravel()
+    mean, error = values.mean(), values.std(ddof=1) / np.sqrt(values.size)
+    assert abs(mean - expected) < Z * error + 1e-7, f"mean {mean} +- {error}, expected {expected}"
+    return mean, error
+
+
+def inner_disc(width, radius_px, margin=1.5):
+    """Pixels wholly inside a centred disc of the given radius in pixels."""
+    c = (np.arange(width) + 0.5) - width / 2
+    xx, yy = np.meshgrid(c, c)
+    return np.hypot(xx, yy) < radius_px - margin
+
+
+def test_white_furnace_convex_diffuse_object_reads_albedo_times_environment():
+    """A convex diffuse object under a uniform environment L: every direction from its surface
+    sees the environment, so it reflects exactly rho L, however many bounces are allowed."""
+    rho, L = 0.6, 0.8
+    scene = path_scene(
+        camera={"eye": [0, 0, 3], "look_at": [0, 0, 0], "width": 48, "height": 48, "fov_y": 60.0},
+        render={"background": [L, L, L], "spp": 32},
+        materials={"m": material(color=[1, 1, 1], diffuse=rho, ambient=0.0)},
+        objects=[sphere([0, 0, 0], 1.0)],
+    )
+    image = tracer.render(scene, threads=2)
+    # The sphere's outline: half-angle asin(r / D) against the half field of view.
+    radius_px = 24 * np.tan(np.arcsin(1 / 3)) / np.tan(np.radians(30))
+    inside = inner_disc(48, radius_px)
+    assert inside.sum() > 400
+    check_mean(image[inside], rho * L)
+    corners = image[:6, :6]
+    assert np.allclose(corners, L, rtol=1e-6)  # seen directly: exactly L
+
+
+def test_furnace_closed_emitting_enclosure_reads_le_over_one_minus_rho():
+    """Inside a closed diffuse enclosure whose inner side emits Le with albedo rho, radiance is
+    Le (1 + rho + rho^2 + ...) = Le / (1 - rho) everywhere: it needs every bounce (Russian
+    roulette ends the paths without bias) and a watertight mesh wound to face inward."""
+    rho, Le = 0.6, 0.5
+    ico = trimesh.creation.icosphere(subdivisions=3, radius=2.0)
+    scene = path_scene(
+        camera={
+            "eye": [0.2, 0.1, 0.0],
+            "look_at": [0, 0, -1],
+            "width": 32,
+            "height": 32,
+            "fov_y": 90.0,
+        },
+        render={"max_depth": 1000, "spp": 32},
+        materials={"m": material(color=[1, 1, 1], diffuse=rho, ambient=0.0, emission=[Le] * 3)},
+        objects=[
+            {
+                "type": "mesh",
+                "vertices": ico.vertices.tolist(),
+                "faces": ico.faces[:, ::-1].tolist(),
+                "material": "m",
+            }
+        ],
+    )
+    image = tracer.render(scene, threads=2)
+    check_mean(image[..., 1], Le / (1 - rho))
+
+
+def test_point_light_falls_off_with_the_square_of_distance():
+    """max_depth 2 is direct lighting only, and with one point light there is nothing random:
+    the floor below the light at height h reads rho / pi * I / h^2 exactly."""
+    for h in (1.0, 2.0, 4.0):
+        scene = path_scene(
+            camera={"eye": [0, 10, 0], "look_at": [0, 0, 0], "up": [0, 0, -1]},
+            render={"max_depth": 2, "spp": 1},  # the pixel centre: the point below the light
+            materials={"m": material(color=[1, 1, 1], diffuse=0.5, ambient=0.0)},
+            lights=[{"type": "point", "position": [0, h, 0], "color": [3.0, 3.0, 3.0]}],
+            objects=[plane([0, 0, 0], [0, 1, 0])],
+        )
+        got = float(tracer.render(scene, threads=1)[0, 0, 0])
+        assert got == pytest.approx(0.5 / np.pi * 3.0 / h**2, rel=1e-6)
+
+
+def test_directional_light_is_irradiance():
+    scene = path_scene(
+        camera={"eye": [0, 10, 0], "look_at": [0, 0, 0], "up": [0, 0, -1]},
+        render={"max_depth": 2, "spp": 1},
+        materials={"m": material(color=[1, 0.5, 0.25], diffuse=0.8, ambient=0.0)},
+        lights=[{"type": "directional", "direction": [1.0, -1.0, 0.0], "color": [2.0, 2.0, 2.0]}],
+        objects=[plane([0, 0, 0], [0, 1, 0])],
+    )
+    got = tracer.render(scene, threads=1)[0, 0]
+    cos = 1 / np.sqrt(2)
+    assert [float(v) for v in got] == pytest.approx(
+        [0.8 * c / np.pi * 2.0 * cos for c in (1, 0.5, 0.25)], rel=1e-6
+    )
+
+
+def test_perfect_mirror_reflects_the_environment_exactly():
+    scene = path_scene(
+        render={"background": [0.3, 0.6, 0.9], "spp": 4},
+        materials={"m": material(diffuse=0.0, ambient=0.0, reflectivity=1.0)},
+        objects=[sphere([0, 0, 0], 1.0)],
+    )
+    got = tracer.render(scene, threads=1)[0, 0]
+    assert [float(v) for v in got] == pytest.approx([0.3, 0.6, 0.9], rel=1e-6)
+
+
+def test_max_depth_counts_as_mitsuba_does():
+    """1: only emitters seen directly (the lit floor is black, the emitter and the environment
+    show); 2: plus direct lighting."""
+    base = dict(
+        camera={"eye": [0, 3, 3], "look_at": [0, 0, 0], "width": 16, "height": 16, "fov_y": 60.0},
+        materials={
+            "m": material(diffuse=0.8, ambient=0.0),
+            "lamp": material(diffuse=0.0, ambient=0.0, emission=[4.0, 4.0, 4.0]),
+        },
+        lights=[{"type": "point", "position": [0, 2, 0], "color": [1, 1, 1]}],
+        objects=[plane([0, 0, 0], [0, 1, 0]), sphere([0.5, 0.5, 0], 0.3, "lamp")],
+    )
+    one = tracer.render(path_scene(render={"max_depth": 1}, **base), threads=1)
+    two = tracer.render(path_scene(render={"max_depth": 2}, **base), threads=1)
+    floor = (slice(12, 16), slice(0, 4))
+    assert np.all(one[floor] == 0) and np.all(two[floor] > 0)
+    assert one.max() == pytest.approx(4.0, rel=1e-6)  # the lamp, seen directly
+
+
+def test_same_image_whatever_the_thread_count():
+    scene = tracer.load_scene(
+        Path(__file__).resolve().parents[1] / "reference" / "scenes" / "cornell_box.toml"
+    ).with_overrides(width=40, height=40, spp=4)
+    images = [tracer.render(scene, threads=t) for t in (1, 2, 5)]
+    assert np.array_equal(images[0], images[1]) and np.array_equal(images[0], images[2])
+    other = tracer.render(scene.with_overrides(seed=1), threads=2)
+    assert not np.array_equal(images[0], other)

@@ -1,0 +1,383 @@
+// Slide "True Global Ray Tracing": light can bounce many times, colour changes at each bounce,
+// each bounce attenuates light, objects block light. The classic tracer follows one mirror ray;
+// here each bounce is sampled at random, and the average of many such paths converges to the
+// solution of the rendering equation (Kajiya 1986): unbiased Monte Carlo path tracing.
+//
+// Physical units: an emitting material gives radiance `emission` from its front side only (as
+// Mitsuba's area emitter does); a point light's colour is its intensity (radiance falls off as
+// 1/r^2); a directional light's colour is its irradiance; the background is a uniform
+// environment radiance. A material scatters as a mix of three lobes:
+//   Lambert:  f = albedo / pi, albedo = diffuse * color;
+//   glossy:   f = specular (n + 2) / (2 pi) max(cos a, 0)^n, a from the mirror direction (the
+//             normalised Phong lobe of Lafortune and Willems 1994), n = shininess;
+//   mirror:   a perfect reflection carrying `reflectivity`.
+// Next-event estimation samples lights at every vertex; emitters that can also be hit by the
+// scattered ray (area lights, the environment) are weighted by multiple importance sampling
+// (the power heuristic, Veach and Guibas 1995) so neither strategy counts them twice. Russian
+// roulette ends long paths without bias. max_depth counts as Mitsuba counts: 1 sees emitters
+// directly, 2 adds direct lighting, and so on (the primary ray is level 1, as in the classic
+// model).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "19_aov.h"
+
+namespace rt {
+
+constexpr double pi = 3.14159265358979323846;
+
+// An orthonormal basis around a unit normal (Duff et al., "Building an Orthonormal Basis,
+// Revisited", JCGT 2017): no branch on which axis to cross with.
+struct Frame {
+    Vec3 s, t, n;
+    explicit Frame(const Vec3 &normal) : n(normal) {
+        double sign = std::copysign(1.0, n.z);
+        double a = -1 / (sign + n.z), b = n.x * n.y * a;
+        s = {1 + sign * n.x * n.x * a, sign * b, -sign * n.x};
+        t = {b, sign + n.y * n.y * a, -n.y};
+    }
+    Vec3 to_world(const Vec3 &v) const { return v.x * s + v.y * t + v.z * n; }
+};
+
+// Cosine-weighted direction about +z (Malley's method): pdf = cos / pi.
+inline Vec3 sample_cosine(double u1, double u2) {
+    double r = std::sqrt(u1), phi = 2 * pi * u2;
+    return {r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0, 1 - u1))};
+}
+
+// Direction about +z distributed as cos^n: pdf = (n + 1) / (2 pi) cos^n.
+inline Vec3 sample_phong_lobe(double u1, double u2, double n) {
+    double c = std::pow(u1, 1 / (n + 1)), s = std::sqrt(std::max(0.0, 1 - c * c));
+    double phi = 2 * pi * u2;
+    return {s * std::cos(phi), s * std::sin(phi), c};
+}
+
+inline Vec3 sample_sphere(double u1, double u2) { // uniform: pdf = 1 / (4 pi)
+    double z = 1 - 2 * u1, r = std::sqrt(std::max(0.0, 1 - z * z)), phi = 2 * pi * u2;
+    return {r * std::cos(phi), r * std::sin(phi), z};
+}
+
+inline double luminance(const Color &c) { return 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b; }
+inline double max_component(const Color &c) { return std::max(c.r, std::max(c.g, c.b)); }
+inline bool is_black(const Color &c) { return c.r == 0 && c.g == 0 && c.b == 0; }
+
+// The scattering of one material at one point: lobe weights and the normal facing the viewer.
+struct BSDF {
+    Color albedo;           // diffuse * color
+    double specular, shininess, reflectivity;
+    double p_diffuse, p_glossy, p_mirror; // the chance of sampling each lobe
+    Vec3 N;                 // shading normal, on the side of the incoming ray
+
+    BSDF(const Material &m, const Vec3 &N_)
+        : albedo(m.diffuse * m.color), specular(m.specular), shininess(m.shininess),
+          reflectivity(m.reflectivity), N(N_) {
+        double wd = max_component(albedo), wg = specular, wm = reflectivity;
+        double sum = wd + wg + wm;
+        p_diffuse = sum > 0 ? wd / sum : 0;
+        p_glossy = sum > 0 ? wg / sum : 0;
+        p_mirror = sum > 0 ? wm / sum : 0;
+    }
+    bool black() const { return p_diffuse + p_glossy + p_mirror == 0; }
+    bool smooth_only() const { return p_diffuse + p_glossy == 0; } // nothing for lights to see
+
+    // f for the non-delta lobes; wo towards the viewer, wi towards the light, both unit.
+    Color eval(const Vec3 &wo, const Vec3 &wi) const {
+        if (dot(wi, N) <= 0 || dot(wo, N) <= 0) return {0, 0, 0};
+        Color f = albedo * (1 / pi);
+        if (specular > 0) {
+            double cos_a = dot(reflect(-wo, N), wi);
+            if (cos_a > 0) {
+                double g = specular * (shininess + 2) / (2 * pi) * std::pow(cos_a, shininess);
+                f += Color{g, g, g};
+            }
+        }
+        return f;
+    }
+    // The solid-angle density of sample() choosing wi, for the non-delta lobes.
+    double pdf(const Vec3 &wo, const Vec3 &wi) const {
+        double cos_i = dot(wi, N);
+        if (cos_i <= 0 || dot(wo, N) <= 0) return 0;
+        double p = p_diffuse * cos_i / pi;
+        if (p_glossy > 0) {
+            double cos_a = dot(reflect(-wo, N), wi);
+            if (cos_a > 0) p += p_glossy * (shininess + 1) / (2 * pi) * std::pow(cos_a, shininess);
+        }
+        return p;
+    }
+};
+
+struct BSDFSample {
+    Vec3 wi;
+    Color weight;  // f cos / pdf, or for the mirror reflectivity / p_mirror
+    double pdf;    // solid-angle pdf of the non-delta lobes (0 for the mirror)
+    bool delta;
+};
+
+inline bool sample_bsdf(const BSDF &b, const Vec3 &wo, double u0, double u1, double u2,
+                        BSDFSample &out) {
+    if (dot(wo, b.N) <= 0) return false;
+    Vec3 mirror = reflect(-wo, b.N);
+    if (u0 < b.p_mirror) {
+        out = {mirror, Color{1, 1, 1} * (b.reflectivity / b.p_mirror), 0, true};
+        return true;
+    }
+    Vec3 wi = u0 < b.p_mirror + b.p_glossy ? Frame(mirror).to_world(sample_phong_lobe(u1, u2, b.shininess))
+                                            : Frame(b.N).to_world(sample_cosine(u1, u2));
+    double p = b.pdf(wo, wi);
+    if (p <= 0) return false;
+    Color f = b.eval(wo, wi);
+    out = {wi, f * (dot(wi, b.N) / p), p, false};
+    return true;
+}
+
+// Multiple importance sampling, the power heuristic (Veach 1997, eq. 9.13).
+inline double power_heuristic(double f, double g) {
+    double f2 = f * f, g2 = g * g;
+    return f2 + g2 > 0 ? f2 / (f2 + g2) : 0;
+}
+
+// Emitting objects that next-event estimation can sample a point on: spheres and triangle
+// meshes (triangles, quads, meshes). Others (planes, boxes, cylinders, tori) still emit when a
+// path hits them; for them the scattered ray is the only strategy, and MIS gives it full weight.
+struct AreaLight {
+    const Sphere *sphere = nullptr;
+    const Mesh *mesh = nullptr;
+    std::vector<double> cdf; // mesh: cumulative triangle areas
+    double area = 0;
+    Color emission;
+    int object = -1;
+};
+
+// A point on an area light, chosen uniformly by area.
+struct LightPoint {
+    Vec3 p, p_error, Ng;
+    double pdf_area;
+};
+
+inline LightPoint sample_area_light(const AreaLight &light, double u0, double u1, double u2) {
+    LightPoint lp;
+    if (light.sphere) {
+        const Sphere &s = *light.sphere;
+        Vec3 n = sample_sphere(u1, u2);
+        lp.p = s.center + s.radius * n;
+        lp.p_error = gamma(7) * (abs(s.center) + abs(s.radius * n));
+        lp.Ng = n;
+    } else {
+        const Mesh &m = *light.mesh;
+        size_t t = size_t(std::upper_bound(light.cdf.begin(), light.cdf.end(), u0 * light.area) -
+                          light.cdf.begin());
+        t = std::min(t, m.triangles.size() - 1);
+        const auto &tri = m.triangles[t];
+        Vec3 a = m.vertices[size_t(tri[0])], b = m.vertices[size_t(tri[1])],
+             c = m.vertices[size_t(tri[2])];
+        double su = std::sqrt(u1), b0 = 1 - su, b1 = u2 * su, b2 = 1 - b0 - b1;
+        lp.p = b0 * a + b1 * b + b2 * c;
+        lp.p_error = gamma(7) * (abs(b0 * a) + abs(b1 * b) + abs(b2 * c));
+        lp.Ng = normalize(cross(b - a, c - a));
+    }
+    lp.pdf_area = 1 / light.area;
+    return lp;
+}
+
+struct PathContext {
+    const Scene &scene;
+    std::vector<AreaLight> area_lights;
+    std::vector<int> area_light_of_object; // object index -> area light index, or -1
+    bool environment;                      // a non-black background: a light to sample
+    int n_sampled; // area lights + the environment: one of them is sampled per vertex
+
+    explicit PathContext(const Scene &s) : scene(s), environment(!is_black(s.settings.background)) {
+        int n_objects = 0;
+        for (const Sphere &sp : s.spheres) n_objects = std::max(n_objects, sp.object + 1);
+        for (const Plane &pl : s.planes) n_objects = std::max(n_objects, pl.object + 1);
+        for (const auto &o : s.objects) n_objects = std::max(n_objects, o->object + 1);
+        area_light_of_object.assign(size_t(n_objects), -1);
+        for (const Sphere &sp : s.spheres) {
+            const Material &m = s.materials[size_t(sp.material)];
+            if (is_black(m.emission)) continue;
+            AreaLight l;
+            l.sphere = &sp;
+            l.area = 4 * pi * sp.radius * sp.radius;
+            l.emission = m.emission;
+            l.object = sp.object;
+            add(l);
+        }
+        for (const auto &o : s.objects) {
+            const auto *mesh = dynamic_cast<const Mesh *>(o.get());
+            const Material &m = s.materials[size_t(o->material)];
+            if (!mesh || is_black(m.emission)) continue;
+            AreaLight l;
+            l.mesh = mesh;
+            double acc = 0;
+            for (const auto &tri : mesh->triangles) {
+                Vec3 a = mesh->vertices[size_t(tri[0])], b = mesh->vertices[size_t(tri[1])],
+                     c = mesh->vertices[size_t(tri[2])];
+                acc += 0.5 * length(cross(b - a, c - a));
+                l.cdf.push_back(acc);
+            }
+            l.area = acc;
+            l.emission = m.emission;
+            l.object = o->object;
+            if (acc > 0) add(l);
+        }
+        n_sampled = int(area_lights.size()) + (environment ? 1 : 0);
+    }
+    void add(const AreaLight &l) {
+        area_light_of_object[size_t(l.object)] = int(area_lights.size());
+        area_lights.push_back(l);
+    }
+    // The solid-angle density with which next-event estimation picks the point y (normal Ng,
+    // on area light `index`) seen from x.
+    double light_pdf(int index, const Vec3 &x, const Vec3 &y, const Vec3 &Ng) const {
+        Vec3 v = y - x;
+        double d2 = dot(v, v), cos_l = std::fabs(dot(Ng, v)) / std::sqrt(d2);
+        if (cos_l == 0) return 0;
+        return (1.0 / n_sampled) / area_lights[size_t(index)].area * d2 / cos_l;
+    }
+};
+
+// Is the segment from the hit (leaving along Ng's side toward `to`) to `target` blocked?
+inline bool occluded(const Scene &scene, const Hit &hit, const Vec3 &Ng, const Vec3 &target,
+                     RayCounts &counts) {
+    Vec3 o = offset_ray_origin(hit.p, hit.p_error, Ng, target - hit.p);
+    ++counts.shadow;
+    return any_hit(scene, {o, target - o}, {0, 1}, counts);
+}
+
+inline bool occluded_towards(const Scene &scene, const Hit &hit, const Vec3 &Ng, const Vec3 &wi,
+                             RayCounts &counts) {
+    Vec3 o = offset_ray_origin(hit.p, hit.p_error, Ng, wi);
+    ++counts.shadow;
+    return any_hit(scene, {o, wi}, {0, infinity}, counts);
+}
+
+// One path from the camera: the radiance it carries back along `ray`.
+inline Color trace_path(const PathContext &ctx, Ray ray, Rng &rng, RayCounts &counts) {
+    const Scene &scene = ctx.scene;
+    const Settings &s = scene.settings;
+    Color L{0, 0, 0}, beta{1, 1, 1}; // the radiance so far; the path's throughput
+    bool prev_delta = true;           // the camera ray and mirror bounces: no MIS
+    double prev_pdf = 0;
+    Vec3 prev_x;
+    for (int level = 1;; ++level) {
+        Hit hit = closest_hit(scene, ray, counts);
+        if (!hit.found()) { // the environment
+            if (ctx.environment) {
+                double w = prev_delta ? 1 : power_heuristic(prev_pdf, (1.0 / ctx.n_sampled) / (4 * pi));
+                L += beta * s.background * w;
+            }
+            break;
+        }
+        const Material &m = scene.materials[size_t(hit.material)];
+        Vec3 wo = -ray.d;
+        bool front = dot(hit.Ng, wo) > 0;
+        Vec3 Ng = front ? hit.Ng : -hit.Ng;
+        Vec3 N = dot(hit.N, Ng) < 0 ? -hit.N : hit.N;
+        if (front && !is_black(m.emission)) { // emission leaves the front side only
+            double w = 1;
+            int light = ctx.area_light_of_object[size_t(hit.object)];
+            if (!prev_delta && light >= 0)
+                w = power_heuristic(prev_pdf, ctx.light_pdf(light, prev_x, hit.p, hit.Ng));
+            L += beta * m.emission * w;
+        }
+        if (level >= s.max_depth) break;
+        BSDF bsdf(m, N);
+        if (bsdf.black()) break;
+
+        // Next-event estimation: every point and directional light, and one of the others.
+        if (!bsdf.smooth_only()) {
+            for (const Light &light : scene.lights) {
+                Vec3 wi;
+                Color Li;
+                if (light.type == Light::Type::point) {
+                    Vec3 v = light.position - hit.p;
+                    double d2 = dot(v, v);
+                    wi = v / std::sqrt(d2);
+                    Li = light.color * (1 / d2); // intensity / r^2
+                } else {
+                    wi = -light.direction;
+                    Li = light.color; // irradiance
+                }
+                double cos_i = dot(wi, N);
+                if (cos_i <= 0 || dot(wi, Ng) <= 0) continue;
+                bool blocked = light.type == Light::Type::point
+                                   ? occluded(scene, hit, Ng, light.position, counts)
+                                   : occluded_towards(scene, hit, Ng, wi, counts);
+                if (!blocked) L += beta * bsdf.eval(wo, wi) * Li * cos_i;
+            }
+            if (ctx.n_sampled > 0) {
+                int k = std::min(int(rng.uniform() * ctx.n_sampled), ctx.n_sampled - 1);
+                double u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+                if (k < int(ctx.area_lights.size())) {
+                    const AreaLight &al = ctx.area_lights[size_t(k)];
+                    LightPoint lp = sample_area_light(al, u0, u1, u2);
+                    Vec3 v = lp.p - hit.p;
+                    double d2 = dot(v, v), d = std::sqrt(d2);
+                    Vec3 wi = v / d;
+                    double cos_l = -dot(lp.Ng, wi), cos_i = dot(wi, N);
+                    if (cos_l > 0 && cos_i > 0 && dot(wi, Ng) > 0) {
+                        double pdf_l = (1.0 / ctx.n_sampled) * lp.pdf_area * d2 / cos_l;
+                        Vec3 target = offset_ray_origin(lp.p, lp.p_error, lp.Ng, -wi);
+                        if (!occluded(scene, hit, Ng, target, counts)) {
+                            double w = power_heuristic(pdf_l, bsdf.pdf(wo, wi));
+                            L += beta * bsdf.eval(wo, wi) * al.emission * (cos_i * w / pdf_l);
+                        }
+                    }
+                } else { // the environment, uniformly over the sphere
+                    Vec3 wi = sample_sphere(u1, u2);
+                    double cos_i = dot(wi, N);
+                    if (cos_i > 0 && dot(wi, Ng) > 0 &&
+                        !occluded_towards(scene, hit, Ng, wi, counts)) {
+                        double pdf_l = (1.0 / ctx.n_sampled) / (4 * pi);
+                        double w = power_heuristic(pdf_l, bsdf.pdf(wo, wi));
+                        L += beta * bsdf.eval(wo, wi) * s.background * (cos_i * w / pdf_l);
+                    }
+                }
+            }
+        }
+
+        // Scatter: choose a lobe, a direction, and carry f cos / pdf along.
+        BSDFSample bs;
+        double u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+        if (!sample_bsdf(bsdf, wo, u0, u1, u2, bs)) break;
+        if (dot(bs.wi, Ng) <= 0) break; // a smooth normal sent it into the surface
+        beta = beta * bs.weight;
+        prev_delta = bs.delta, prev_pdf = bs.pdf, prev_x = hit.p;
+        // Russian roulette (as Mitsuba, from the fifth bounce): survive with probability q and
+        // carry 1/q more, so the expectation is unchanged.
+        if (level >= 5) {
+            double q = std::min(max_component(beta), 0.95);
+            if (!(rng.uniform() < q)) break;
+            beta = beta * (1 / q);
+        }
+        ray = secondary_ray(hit, Ng, bs.wi);
+        ++counts.secondary;
+    }
+    return L;
+}
+
+// A tile of pixels: spp paths per pixel through the strata of for_each_sample(), each path
+// with its own random numbers (seeded by scene seed, pixel and sample), box-filtered.
+inline void render_tile_path(const PathContext &ctx, int x0, int y0, int x1, int y1, float *out,
+                             RayCounts &counts) {
+    const Scene &scene = ctx.scene;
+    const Camera &cam = scene.camera;
+    for (int j = y0; j < y1; ++j)
+        for (int i = x0; i < x1; ++i) {
+            Color sum{0, 0, 0};
+            uint64_t pixel = uint64_t(j) * uint64_t(cam.width) + uint64_t(i);
+            uint64_t k = 0;
+            for_each_sample(scene, i, j, [&](double sx, double sy) {
+                Rng rng(Rng(scene.settings.seed * 0x2545f4914f6cdd1dull + 0x1234567ull).next() ^
+                        Rng(pixel * 0x9e3779b97f4a7c15ull + k++).next());
+                ++counts.primary;
+                sum += trace_path(ctx, cam.primary_ray(sx, sy), rng, counts);
+            });
+            store_pixel(out, cam.width, i, j, sum * (1.0 / scene.settings.spp));
+        }
+}
+
+} // namespace rt
