@@ -157,3 +157,18 @@ def test_same_image_whatever_the_thread_count():
     assert np.array_equal(images[0], images[1]) and np.array_equal(images[0], images[2])
     other = tracer.render(scene.with_overrides(seed=1), threads=2)
     assert not np.array_equal(images[0], other)
+
+
+def test_progressive_rendering_spends_its_budget_in_whole_passes():
+    from tracer.render import render_progressive, render_with_stats
+
+    scene = tracer.load_scene(
+        Path(__file__).resolve().parents[1] / "reference" / "scenes" / "cornell_box.toml"
+    ).with_overrides(width=24, height=24, spp=2)
+    once = render_progressive(scene, 1e-6, threads=2)  # the budget is gone after one pass
+    assert once.rays["primary"] == 24 * 24 * 2
+    first_pass = render_with_stats(scene.with_overrides(seed=0), threads=2).image
+    assert np.array_equal(once.image, first_pass)
+    longer = render_progressive(scene, 0.5, threads=2)
+    assert longer.rays["primary"] > 4 * once.rays["primary"]
+    assert longer.seconds < 2.0

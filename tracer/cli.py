@@ -9,7 +9,7 @@ from importlib import resources
 from pathlib import Path
 
 from tracer.image import ImageFormatError, image_format, save_aov, save_image
-from tracer.render import aov_channels, render_with_stats
+from tracer.render import aov_channels, render_progressive, render_with_stats
 from tracer.scene import Scene, SceneError, load_scene
 
 DEMO_SCENE = "ex25.toml"
@@ -26,6 +26,26 @@ def _positive_int(text: str) -> int:
         raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
     if value < 1:
         raise argparse.ArgumentTypeError(f"expected a number >= 1, got {value}")
+    return value
+
+
+def _duration(text: str) -> float:
+    """'10s', '2m', '500ms', '1h' or a plain number of seconds."""
+    units = {"ms": 1e-3, "s": 1.0, "m": 60.0, "h": 3600.0}
+    for suffix in ("ms", "s", "m", "h"):
+        if text.endswith(suffix):
+            number, scale = text[: -len(suffix)], units[suffix]
+            break
+    else:
+        number, scale = text, 1.0
+    try:
+        value = float(number) * scale
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected a duration like 10s or 2m, got {text!r}"
+        ) from None
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"expected a positive duration, got {text!r}")
     return value
 
 
@@ -54,9 +74,15 @@ def _render_to(scene: Scene, outputs: Sequence[Path], args: argparse.Namespace) 
     for out in outputs:  # refuse a bad suffix before spending time on the render
         if image_format(out) == ".png" and aov:
             raise ImageFormatError(f"{out}: an aov render has no colours to show; use .exr or .npy")
-    result = render_with_stats(
-        scene, threads=args.threads, progress=None if not args.quiet else False
-    )
+    budget = getattr(args, "time", None)
+    if budget is not None:
+        result = render_progressive(
+            scene, budget, threads=args.threads, progress=None if not args.quiet else False
+        )
+    else:
+        result = render_with_stats(
+            scene, threads=args.threads, progress=None if not args.quiet else False
+        )
     for out in outputs:
         if aov:
             save_aov(out, aov_channels(result.image))
@@ -66,7 +92,8 @@ def _render_to(scene: Scene, outputs: Sequence[Path], args: argparse.Namespace) 
         rays = result.rays
         total = rays["primary"] + rays["secondary"] + rays["shadow"]
         print(
-            f"{scene.camera.width}x{scene.camera.height}, {scene.render.spp} spp, "
+            f"{scene.camera.width}x{scene.camera.height}, "
+            f"{rays['primary'] // (scene.camera.width * scene.camera.height)} spp, "
             f"{result.threads} threads: {result.seconds:.3f} s, {total / 1e6:.2f} M rays "
             f"({rays['primary']} primary, {rays['secondary']} secondary, {rays['shadow']} shadow); "
             f"{rays['box_tests']} ray/box and {rays['primitive_tests']} ray/primitive tests"
@@ -157,6 +184,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("render", help="render a scene file to .exr, .png or .npy")
     p.add_argument("scene", help="scene file (TOML)")
     p.add_argument("-o", "--output", required=True, help="output image: .exr, .png or .npy")
+    p.add_argument("--time", type=_duration, help="render passes until this time is spent (10s)")
     _add_overrides(p)
     p.set_defaults(func=cmd_render)
 

@@ -156,3 +156,38 @@ def render(
 def aov_channels(image: npt.NDArray[np.float32]) -> dict[str, npt.NDArray[np.float32]]:
     """An aov render as named (height, width) channels, as they go into an EXR file."""
     return {name: np.ascontiguousarray(image[..., k]) for k, name in enumerate(AOV_CHANNELS)}
+
+
+def render_progressive(
+    scene: Scene,
+    seconds: float,
+    *,
+    threads: int | None = None,
+    progress: bool | None = None,
+) -> RenderResult:
+    """Render passes of ``scene.render.spp`` samples until ``seconds`` are spent, and average
+    them: the longer the budget, the less noise. Pass k uses the seed (seed, k), so a given
+    number of passes gives the same image on any machine; at least one pass is made, and no
+    pass is started that the time left would not cover at the pace so far."""
+    import time
+
+    if scene.render.integrator == "aov":
+        raise ValueError("an aov render has nothing to refine: render it once")
+    start = time.perf_counter()
+    total: npt.NDArray[np.float64] | None = None
+    rays: dict[str, int] = {}
+    passes = 0
+    while True:
+        seed = (scene.render.seed * 1_000_003 + passes) % 2**64
+        result = render_with_stats(
+            scene.with_overrides(seed=seed), threads=threads, progress=progress
+        )
+        total = result.image.astype(np.float64) if total is None else total + result.image
+        for key, value in result.rays.items():
+            rays[key] = rays.get(key, 0) + value
+        passes += 1
+        elapsed = time.perf_counter() - start
+        if elapsed + elapsed / passes > seconds:
+            break
+    image = (total / passes).astype(np.float32)
+    return RenderResult(image, rays, time.perf_counter() - start, result.threads)
