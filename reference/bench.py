@@ -164,9 +164,22 @@ def suite_geometry(
     return rows
 
 
+def suite_convergence(out_dir: str | os.PathLike[str] = "out") -> list[dict[str, Any]]:
+    """Error against run time on the Cornell box (reference/convergence.py); writes the
+    log-log plot beside the JSON and prints the time each renderer needs to reach an error."""
+    from reference.convergence import convergence, plot, summary
+
+    rows = convergence()
+    plot(rows, Path(out_dir) / "convergence-cornell.png")
+    print(summary(rows))
+    print(f"plot: {Path(out_dir) / 'convergence-cornell.png'}")
+    return rows
+
+
 SUITES: dict[str, Callable[..., list[dict[str, Any]]]] = {
     "classic": suite_classic,
     "geometry": suite_geometry,
+    "convergence": suite_convergence,
 }
 
 
@@ -174,7 +187,13 @@ def run_suites(names: list[str], json_path: str | os.PathLike[str] | None) -> li
     rows: list[dict[str, Any]] = []
     where = machine()
     for name in names:
-        for row in SUITES[name]():
+        suite = SUITES[name]
+        made = (
+            suite(out_dir=Path(json_path).parent)
+            if name == "convergence" and json_path
+            else suite()
+        )
+        for row in made:
             row["suite"] = name
             row["machine"] = where
             rows.append(row)
@@ -187,6 +206,7 @@ def run_suites(names: list[str], json_path: str | os.PathLike[str] | None) -> li
 def format_ratios(rows: list[dict[str, Any]]) -> str:
     """Each case and thread count: every renderer's value and its ratio to rtlab's."""
     lines = []
+    rows = [r for r in rows if r["metric"] != "rmse"]  # convergence rows print their own summary
     keys = sorted({(r["case"], r["threads"], r["metric"]) for r in rows})
     for case, threads, metric in keys:
         group = {r["renderer"]: r for r in rows if (r["case"], r["threads"], r["metric"]) ==

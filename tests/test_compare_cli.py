@@ -104,3 +104,22 @@ def test_geometry_bench_rows_have_the_contract_fields():
     builds = [r for r in rows if r["case"] == "bunny-bvh-build"]
     assert {r["renderer"] for r in builds} == {"rtlab", "embree"}
     assert all(r["metric"] == "seconds" and r["value"] > 0 for r in builds)
+
+
+def test_convergence_rows_plot_and_summary(tmp_path):
+    from reference.convergence import convergence, plot, summary, time_to_error
+
+    rows = convergence(width=32, height=32, sweep=(4, 16), renderers=("rtlab", "mitsuba-llvm"))
+    assert {r["renderer"] for r in rows} == {"rtlab", "mitsuba-llvm"}
+    for r in rows:
+        assert "cornell" in r["case"] and r["metric"] == "rmse"
+        assert r["value"] > 0 and r["seconds"] > 0 and r["spp"] in (4, 16)
+        assert {"relmse", "flip", "threads", "unit"} <= set(r)
+    # More samples, less error: Monte Carlo (16 vs 4 spp halves the RMSE in expectation).
+    for name in ("rtlab", "mitsuba-llvm"):
+        err = {r["spp"]: r["value"] for r in rows if r["renderer"] == name}
+        assert err[16] < 0.8 * err[4]
+    plot(rows, tmp_path / "c.png")
+    assert (tmp_path / "c.png").stat().st_size > 1000
+    assert "rtlab is" in summary(rows)
+    assert all(t > 0 for t in time_to_error(rows, 0.05).values())

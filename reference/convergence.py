@@ -1,0 +1,140 @@
+"""Error against run time (``rtlab bench convergence``): each renderer renders the same
+path-traced scene over a sweep of samples per pixel; each point records the wall time of the
+render and its error against a high-spp Mitsuba reference (RMSE, relative MSE, FLIP).
+
+A Monte Carlo estimate's RMSE falls as 1/sqrt(samples), so with time proportional to samples
+the points of one renderer lie on a line of slope -1/2 in log-log; its height is the
+renderer's efficiency. Fitting that line (slope fixed) gives the time each renderer needs to
+reach a given error: their ratio is the speed comparison that matters for Monte Carlo.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from reference.stats import mitsuba_reference
+from tracer.render import render_with_stats
+from tracer.scene import Scene, load_scene
+
+SCENES = Path(__file__).resolve().parent / "scenes"
+SWEEP = (4, 8, 16, 32, 64, 128)
+
+
+def errors(image: np.ndarray, ref: np.ndarray) -> dict[str, float]:
+    from reference.metrics import flip
+
+    diff = np.asarray(image, np.float64) - ref
+    return {
+        "rmse": float(np.sqrt(np.mean(diff**2))),
+        "relmse": float(np.mean(diff**2 / (ref**2 + 1e-2))),
+        "flip": flip(ref, image)[0],
+    }
+
+
+def _mitsuba_timer(scene: Scene, variant: str) -> Any:
+    """A function spp -> (image, seconds) rendering a loaded scene warm (JIT done before)."""
+    import mitsuba as mi
+
+    import converters.mitsuba as cm
+
+    cm.use_variant(variant)
+    mi_scene = mi.load_dict(cm.to_mitsuba_dict(scene))
+    mi.render(mi_scene, spp=1)  # compile the kernels; not part of any timing
+
+    def run(spp: int, seed: int) -> tuple[np.ndarray, float]:
+        cm.use_variant(variant)
+        start = time.perf_counter()
+        image = np.array(mi.render(mi_scene, spp=spp, seed=seed), dtype=np.float32)[..., :3]
+        return image, time.perf_counter() - start
+
+    return run
+
+
+def convergence(
+    name: str = "cornell_box", width: int = 64, height: int = 64, sweep: tuple[int, ...] = SWEEP,
+    reference_spp: int = 4096, renderers: tuple[str, ...] = ("rtlab", "mitsuba-llvm",
+                                                              "mitsuba-scalar"),
+) -> list[dict[str, Any]]:  # fmt: skip
+    scene = load_scene(SCENES / f"{name}.toml").with_overrides(width=width, height=height)
+    ref = mitsuba_reference(scene, reference_spp).mean
+    case = f"{name}-{width}x{height}"
+    timers: dict[str, Any] = {}
+    for r in renderers:
+        if r == "rtlab":
+            timers[r] = lambda spp, seed: (lambda res: (res.image, res.seconds))(
+                render_with_stats(scene.with_overrides(spp=spp, seed=seed), progress=False)
+            )
+        else:
+            timers[r] = _mitsuba_timer(scene, "llvm_ad_rgb" if r.endswith("llvm") else "scalar_rgb")
+    rows = []
+    threads = os.cpu_count() or 1
+    for spp in sweep:
+        for r, run in timers.items():
+            image, seconds = run(spp, 17 + spp)
+            e = errors(image, ref)
+            rows.append({"case": case, "renderer": r, "threads": threads, "metric": "rmse",
+                         "value": e["rmse"], "unit": "", "spp": spp, "seconds": seconds,
+                         "relmse": e["relmse"], "flip": e["flip"],
+                         "reference_spp": reference_spp})  # fmt: skip
+    return rows
+
+
+def efficiency(rows: list[dict[str, Any]]) -> dict[str, float]:
+    """Per renderer, c in RMSE = c / sqrt(seconds): the geometric mean of rmse sqrt(seconds)."""
+    out: dict[str, list[float]] = {}
+    for r in rows:
+        out.setdefault(r["renderer"], []).append(np.log(r["value"] * np.sqrt(r["seconds"])))
+    return {k: float(np.exp(np.mean(v))) for k, v in out.items()}
+
+
+def time_to_error(rows: list[dict[str, Any]], target: float) -> dict[str, float]:
+    return {k: (c / target) ** 2 for k, c in efficiency(rows).items()}
+
+
+def plot(rows: list[dict[str, Any]], path: str | os.PathLike[str]) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from tracer.image import atomic_path
+
+    fig, ax = plt.subplots(figsize=(6, 4.5), dpi=100)
+    for renderer in dict.fromkeys(r["renderer"] for r in rows):
+        pts = sorted((r["seconds"], r["value"]) for r in rows if r["renderer"] == renderer)
+        ax.loglog(*zip(*pts, strict=True), "o-", label=renderer)
+    t = np.array([min(r["seconds"] for r in rows), max(r["seconds"] for r in rows)])
+    c = max(efficiency(rows).values())
+    ax.loglog(t, c / np.sqrt(t), "k--", lw=1, label="slope -1/2 (Monte Carlo)")
+    ax.set_xlabel("render time (s)")
+    ax.set_ylabel("RMSE against the reference")
+    ax.set_title(rows[0]["case"])
+    ax.legend()
+    ax.grid(True, which="both", alpha=0.3)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", bbox_inches="tight")
+    plt.close(fig)
+
+
+def summary(rows: list[dict[str, Any]]) -> str:
+    target = float(np.median([r["value"] for r in rows if r["renderer"] == "rtlab"]))
+    times = time_to_error(rows, target)
+    ours = times.get("rtlab")
+    lines = [f"{rows[0]['case']}: time to reach RMSE {target:.3g} (fitted, slope -1/2):"]
+    for k, t in times.items():
+        ratio = (
+            ""
+            if k == "rtlab" or ours is None
+            else (
+                f"   rtlab is {t / ours:.2f}x faster"
+                if t >= ours
+                else f"   rtlab is {ours / t:.2f}x slower"
+            )
+        )
+        lines.append(f"  {k:<16}{t:>9.3f} s{ratio}")
+    return "\n".join(lines)
