@@ -265,6 +265,11 @@ def _make_plugins() -> tuple[type, type]:
                 coef *= g["reflectivity"]
                 active &= g["reflectivity"] > 0
                 o, d = p + eps * R, R
+            # Some 3 samples in 7 million (Ex 25, 1024 spp, from the third level on, only with
+            # lights) come out NaN; the cause is not yet found (see the closing note of the
+            # session that added this). They are dropped, not averaged in: a dropped sample
+            # biases a pixel by 1/spp of its value, a NaN destroys it.
+            color = dr.select(dr.isfinite(color), color, 0.0)
             return mi.Color3f(color), mi.Bool(True), []
 
         def aov_names(self) -> list[str]:
@@ -439,13 +444,22 @@ def _sphere_hit(g: dict[str, Any], o: Any, d: Any, t_mitsuba: Any) -> tuple[Any,
     q = -(b + dr.copysign(dr.sqrt(disc), b))
     t0, t1 = (dr.dot(f, f) - r2) / q, q / a
     t = dr.select(dr.abs(t0 - t_mitsuba) < dr.abs(t1 - t_mitsuba), t0, t1)
+    # A ray that grazes the sphere exactly (q = 0) has no stable second root: keep Mitsuba's.
+    t = _finite_or(t, t_mitsuba)
     return t, (o + t * d - center) / g["radius"]
 
 
 def _plane_hit(g: dict[str, Any], o: Any, d: Any) -> tuple[Any, Any]:
     """(a - o).n / (d.n), the plane's implicit form."""
     n = mi.Vector3d(g["nx"], g["ny"], g["nz"])
-    return dr.dot(mi.Point3d(g["ax"], g["ay"], g["az"]) - o, n) / dr.dot(d, n), n
+    t = dr.dot(mi.Point3d(g["ax"], g["ay"], g["az"]) - o, n) / dr.dot(d, n)
+    return t, n
+
+
+def _finite_or(t: Any, fallback: Any) -> Any:
+    """A ray parallel to a plane in double that Mitsuba's float32 still counted as a hit: keep
+    Mitsuba's t rather than an infinite one."""
+    return dr.select(dr.isfinite(t), t, fallback)
 
 
 def _torus_hit(g: dict[str, Any], o: Any, d: Any, t_mitsuba: Any) -> tuple[Any, Any]:
@@ -479,6 +493,7 @@ def _refine_hit(g: dict[str, Any], o: Any, d: Any, t_mitsuba: Any, n_mitsuba: An
             t, n = _sphere_hit(g, o, d, t_mitsuba)
         elif g["kind"] == PLANE:
             t, n = _plane_hit(g, o, d)
+            t = _finite_or(t, t_mitsuba)
         elif g["kind"] == TORUS:
             t, n = _torus_hit(g, o, d, t_mitsuba)
         else:
@@ -486,6 +501,7 @@ def _refine_hit(g: dict[str, Any], o: Any, d: Any, t_mitsuba: Any, n_mitsuba: An
         return t, dr.normalize(n)
     t_sphere, n_sphere = _sphere_hit(g, o, d, t_mitsuba)
     t_plane, n_plane = _plane_hit(g, o, d)
+    t_plane = _finite_or(t_plane, t_mitsuba)
     t_torus, n_torus = _torus_hit(g, o, d, t_mitsuba)
     is_sphere, is_plane, is_torus = g["kind"] == SPHERE, g["kind"] == PLANE, g["kind"] == TORUS
     t = dr.select(is_sphere, t_sphere, dr.select(is_plane, t_plane, t_mitsuba))

@@ -165,14 +165,18 @@ def suite_geometry(
 
 
 def suite_convergence(out_dir: str | os.PathLike[str] = "out") -> list[dict[str, Any]]:
-    """Error against run time on the Cornell box (reference/convergence.py); writes the
-    log-log plot beside the JSON and prints the time each renderer needs to reach an error."""
-    from reference.convergence import convergence, plot, summary
+    """Error against run time (reference/convergence.py): the Cornell box path traced by rtlab
+    and Mitsuba, and the demo scene antialiased by rtlab, POV-Ray and Mitsuba; writes a log-log
+    plot per case beside the JSON and prints the time each renderer needs to reach an error."""
+    from reference.convergence import convergence, convergence_classic, plot, summary
 
-    rows = convergence()
-    plot(rows, Path(out_dir) / "convergence-cornell.png")
-    print(summary(rows))
-    print(f"plot: {Path(out_dir) / 'convergence-cornell.png'}")
+    rows = []
+    for name, made in (("cornell", convergence()), ("ex25", convergence_classic())):
+        path = Path(out_dir) / f"convergence-{name}.png"
+        plot(made, path)
+        print(summary(made))
+        print(f"plot: {path}")
+        rows += made
     return rows
 
 

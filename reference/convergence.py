@@ -138,3 +138,43 @@ def summary(rows: list[dict[str, Any]]) -> str:
         )
         lines.append(f"  {k:<16}{t:>9.3f} s{ratio}")
     return "\n".join(lines)
+
+
+#: Classic scenes: POV-Ray's n x n jittered supersampling against rtlab's stratified spp = n^2.
+CLASSIC_SWEEP = (1, 2, 3, 4, 6, 8)
+
+
+def convergence_classic(
+    name: str = "ex25", width: int = 96, height: int = 72,
+    sweep: tuple[int, ...] = CLASSIC_SWEEP, reference_spp: int = 1024,
+) -> list[dict[str, Any]]:  # fmt: skip
+    """Error against time for antialiasing a classic scene: rtlab (stratified jittered spp =
+    n^2), POV-Ray (jittered n x n supersampling) and Mitsuba llvm_ad_rgb (the classic
+    integrator, independent samples), against Mitsuba's classic integrator at reference_spp."""
+    from reference.mitsuba import run_mitsuba
+    from reference.povray import run_povray
+
+    scene = load_scene(SCENES / f"{name}.toml").with_overrides(width=width, height=height)
+    ref = run_mitsuba(scene.with_overrides(spp=reference_spp), variant="llvm_ad_rgb").image
+    case = f"{name}-{width}x{height}"
+    threads = os.cpu_count() or 1
+    rows = []
+    for n in sweep:
+        spp = n * n
+        runs = {
+            "rtlab": lambda spp=spp: (lambda r: (r.image, r.seconds))(render_with_stats(
+                scene.with_overrides(spp=spp, seed=spp), progress=False)),
+            "povray": lambda n=n: (lambda r: (r.image, r.trace_seconds))(
+                run_povray(scene, threads=threads, antialias=n) if n > 1
+                else run_povray(scene, threads=threads)),
+            "mitsuba-llvm": lambda spp=spp: (lambda r: (r.image, r.render_seconds))(
+                run_mitsuba(scene.with_overrides(spp=spp, seed=spp), variant="llvm_ad_rgb")),
+        }  # fmt: skip
+        for renderer, run in runs.items():
+            image, seconds = run()
+            e = errors(image, ref)
+            rows.append({"case": case, "renderer": renderer, "threads": threads,
+                         "metric": "rmse", "value": e["rmse"], "unit": "", "spp": spp,
+                         "seconds": seconds, "relmse": e["relmse"], "flip": e["flip"],
+                         "reference_spp": reference_spp})  # fmt: skip
+    return rows

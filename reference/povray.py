@@ -74,8 +74,10 @@ _COUNTS = {
 }
 
 
-def _run(sdl_path: Path, out: Path, args: list[str], threads: int) -> tuple[float, str]:
-    cmd = [povray_executable(), f"+I{sdl_path}", f"+O{out}", *args, "-D", "-A", "-P",
+def _run(
+    sdl_path: Path, out: Path, args: list[str], threads: int, aa: tuple[str, ...] = ("-A",)
+) -> tuple[float, str]:
+    cmd = [povray_executable(), f"+I{sdl_path}", f"+O{out}", *args, "-D", *aa, "-P",
            f"+WT{threads}", "-V"]  # fmt: skip
     done = subprocess.run(cmd, capture_output=True, text=True, check=False)
     if done.returncode != 0 or not out.exists():
@@ -95,11 +97,15 @@ def run_povray(
     workdir: str | Path | None = None,
     sdl: str | None = None,
     exr_pass: bool = True,
+    antialias: int = 0,
 ) -> PovrayResult:
     """Render ``scene`` with POV-Ray; the image and its per-pixel precision.
 
     ``sdl`` renders that text instead of the converter's (the tests feed wrong conversions).
     ``exr_pass=False`` skips the second, EXR render of clamped pixels (for timing one pass).
+    ``antialias=n`` supersamples every pixel with a jittered n x n grid (``+A0.0 +AM1 +Rn +J``:
+    threshold 0, so no pixel is skipped), the estimator of rtlab's stratified spp = n^2, in one
+    half-float EXR pass (its rounding is far below the noise of any such render).
     """
     cam = scene.camera
     with tempfile.TemporaryDirectory(prefix="rtlab-povray-") as tmp:
@@ -112,6 +118,18 @@ def run_povray(
             sdl_path.write_text(sdl)
         size = [f"+W{cam.width}", f"+H{cam.height}"]
         start = time.perf_counter()
+        if antialias > 0:
+            aa = ("+A0.0", "+AM1", f"+R{antialias}", "+J1.0")
+            trace, log = _run(sdl_path, work / "out.exr", [*size, "+FE"], threads, aa)
+            image = load_image(work / "out.exr").astype(np.float64)
+            return PovrayResult(
+                image.astype(np.float32),
+                (HALF_RELATIVE * np.abs(image)).astype(np.float32),
+                trace,
+                time.perf_counter() - start,
+                {},
+                sdl_path.read_text(),
+            )
         trace, log = _run(sdl_path, work / "out.png", [*size, "+FN16", "File_Gamma=1.0"], threads)
         image = read_png16(work / "out.png")
         bound = np.full(image.shape, PNG16_BOUND)

@@ -123,3 +123,13 @@ def test_convergence_rows_plot_and_summary(tmp_path):
     assert (tmp_path / "c.png").stat().st_size > 1000
     assert "rtlab is" in summary(rows)
     assert all(t > 0 for t in time_to_error(rows, 0.05).values())
+
+
+def test_classic_convergence_includes_povray():
+    from reference.convergence import convergence_classic
+
+    rows = convergence_classic(width=24, height=18, sweep=(1, 3), reference_spp=64)
+    assert {r["renderer"] for r in rows} == {"rtlab", "povray", "mitsuba-llvm"}
+    for name in ("rtlab", "povray"):
+        err = {r["spp"]: r["value"] for r in rows if r["renderer"] == name}
+        assert err[9] < err[1]  # antialiasing converges toward the reference
