@@ -581,33 +581,9 @@ def to_mitsuba_dict(scene: Scene, *, mesh_dir: str | os.PathLike[str] | None = N
             "background": mi.ScalarColor3f(ren.background),
             "ambient_light": mi.ScalarColor3f(ren.ambient_light),
         },
-        "sensor": {
-            "type": "perspective",
-            "fov": cam.fov_y,
-            "fov_axis": "y",
-            "to_world": mi.ScalarTransform4f().look_at(
-                origin=cam.eye, target=cam.look_at, up=cam.up
-            ),
-            "sampler": _sampler(scene),
-            "film": {
-                "type": "hdrfilm",
-                "width": cam.width,
-                "height": cam.height,
-                "rfilter": {"type": "box"},
-                "pixel_format": "rgb",
-                "component_format": "float32",
-            },
-        },
+        "sensor": _sensor(scene, _sampler(scene)),
     }
-    for i, light in enumerate(scene.lights):
-        color = mi.ScalarColor3f(light.color)
-        if isinstance(light, PointLight):
-            d[f"light_{i}"] = {"type": "point", "position": mi.ScalarPoint3f(light.position),
-                               "intensity": color}  # fmt: skip
-        elif isinstance(light, DirectionalLight):
-            d[f"light_{i}"] = {"type": "directional",
-                               "direction": mi.ScalarVector3f(light.direction),
-                               "irradiance": color}  # fmt: skip
+    d.update(_lights(scene))
     half = PLANE_SCALE * scene_extent(scene)
     for i, obj in enumerate(scene.objects):
         m = scene.materials[obj.material]
@@ -623,6 +599,23 @@ def to_mitsuba_dict(scene: Scene, *, mesh_dir: str | os.PathLike[str] | None = N
         for k, shape in enumerate(_shapes(obj, i, half, cam.eye, meshes, bsdf)):
             d[f"object_{i}" + (f"_{k}" if k else "")] = {**shape, "bsdf": dict(bsdf)}
     return d
+
+
+def _lights(scene: Scene) -> dict[str, Any]:
+    """Mitsuba's own point (colour as intensity) and directional (colour as irradiance)
+    emitters. The classic integrator reads them back as classic light colours; Mitsuba's path
+    integrator uses them as the physical quantities they are."""
+    out: dict[str, Any] = {}
+    for i, light in enumerate(scene.lights):
+        color = mi.ScalarColor3f(light.color)
+        if isinstance(light, PointLight):
+            out[f"light_{i}"] = {"type": "point", "position": mi.ScalarPoint3f(light.position),
+                                 "intensity": color}  # fmt: skip
+        elif isinstance(light, DirectionalLight):
+            out[f"light_{i}"] = {"type": "directional",
+                                 "direction": mi.ScalarVector3f(light.direction),
+                                 "irradiance": color}  # fmt: skip
+    return out
 
 
 def _sensor(scene: Scene, sampler: dict[str, Any]) -> dict[str, Any]:
@@ -694,15 +687,7 @@ def _path_dict(scene: Scene, meshes: Path) -> dict[str, Any]:
     }
     if max(ren.background) > 0:
         d["environment"] = {"type": "constant", "radiance": mi.ScalarColor3f(ren.background)}
-    for i, light in enumerate(scene.lights):
-        color = mi.ScalarColor3f(light.color)
-        if isinstance(light, PointLight):  # colour = intensity
-            d[f"light_{i}"] = {"type": "point", "position": mi.ScalarPoint3f(light.position),
-                               "intensity": color}  # fmt: skip
-        elif isinstance(light, DirectionalLight):  # colour = irradiance
-            d[f"light_{i}"] = {"type": "directional",
-                               "direction": mi.ScalarVector3f(light.direction),
-                               "irradiance": color}  # fmt: skip
+    d.update(_lights(scene))
     half = PLANE_SCALE * scene_extent(scene)
     for i, obj in enumerate(scene.objects):
         m = scene.materials[obj.material]

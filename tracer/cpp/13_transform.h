@@ -79,6 +79,19 @@ struct Transform {
         hit.N = normal(hit.N);
         hit.Ng = normal(hit.Ng);
     }
+
+    // The hit record of `object` from its own coordinates: the point p with error bound e and
+    // the (geometric = shading) normal N there, at ray parameter t.
+    void place(const Object &object, double t, const Vec3 &p, const Vec3 &e, const Vec3 &N,
+               Hit &hit) const {
+        hit.t = t;
+        hit.p = p;
+        hit.p_error = e;
+        hit.N = hit.Ng = N;
+        to_world(hit);
+        hit.object = object.object;
+        hit.material = object.material;
+    }
 };
 
 } // namespace rt

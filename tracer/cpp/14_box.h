@@ -124,13 +124,7 @@ struct Box : Object {
         if (axis == 0) p.x = face, e.x = 0, N.x = face == box.min.x ? -1 : 1;
         else if (axis == 1) p.y = face, e.y = 0, N.y = face == box.min.y ? -1 : 1;
         else p.z = face, e.z = 0, N.z = face == box.min.z ? -1 : 1;
-        hit.t = t;
-        hit.p = p;
-        hit.p_error = e;
-        hit.N = hit.Ng = N;
-        transform.to_world(hit);
-        hit.object = object;
-        hit.material = material;
+        transform.place(*this, t, p, e, N, hit);
         return true;
     }
 };

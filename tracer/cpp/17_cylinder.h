@@ -69,13 +69,7 @@ struct Cylinder : Object {
             p.z = N.z < 0 ? 0 : height;
             e.z = 0;
         }
-        hit.t = t;
-        hit.p = p;
-        hit.p_error = e;
-        hit.N = hit.Ng = N;
-        transform.to_world(hit);
-        hit.object = object;
-        hit.material = material;
+        transform.place(*this, t, p, e, N, hit);
         return true;
     }
 };

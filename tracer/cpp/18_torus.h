@@ -110,13 +110,7 @@ struct Torus : Object {
             Vec3 ring = rho > 0 ? Vec3{R * p.x / rho, R * p.y / rho, 0} : Vec3{R, 0, 0};
             Vec3 N = normalize(p - ring);
             p = ring + r * N;
-            hit.t = t;
-            hit.p = p;
-            hit.p_error = gamma(8) * (abs(ring) + abs(r * N));
-            hit.N = hit.Ng = N;
-            transform.to_world(hit);
-            hit.object = object;
-            hit.material = material;
+            transform.place(*this, t, p, gamma(8) * (abs(ring) + abs(r * N)), N, hit);
             return true;
         }
         return false;
