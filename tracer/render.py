@@ -68,6 +68,7 @@ def to_core(scene: Scene) -> _core.Scene:
             core.add_point_light(light.position, light.color)
         elif isinstance(light, DirectionalLight):
             core.add_directional_light(light.direction, light.color)
+    flat: list = []
     for i, obj in enumerate(scene.objects):
         m = index[obj.material]
         if isinstance(obj, Sphere):
@@ -84,13 +85,39 @@ def to_core(scene: Scene) -> _core.Scene:
             core.add_torus(obj.major_radius, obj.minor_radius, to_world(obj)[:3].tolist(), i, m)
         elif isinstance(obj, Triangle | Quad | Mesh):
             vertices, faces, normals = triangles(obj)
+            if normals is None and max(scene.materials[obj.material].emission) == 0:
+                flat.append((vertices, faces, i, m))  # joins the scene's one flat mesh
+                continue
             core.add_mesh(
                 np.ascontiguousarray(vertices, dtype=np.float64),
                 np.ascontiguousarray(faces, dtype=np.int32),
                 None if normals is None else np.ascontiguousarray(normals, dtype=np.float64),
                 scene.render.acceleration, i, m,
             )  # fmt: skip
+    if flat:
+        _add_flat_triangles(core, flat, scene.render.acceleration)
     return core
+
+
+def _add_flat_triangles(core: _core.Scene, parts: list, acceleration: str) -> None:
+    """Every flat-shaded, non-emitting triangle object (triangles, quads, flat meshes) in one
+    mesh with one hierarchy, each triangle remembering its object and material: a room of six
+    quads then costs a ray one hierarchy, not six objects tested one after another. (Emitting
+    meshes stay apart: the path tracer samples points on each area light by its own area.)"""
+    offset, vertices, faces, objects, materials = 0, [], [], [], []
+    for v, f, obj, mat in parts:
+        vertices.append(v)
+        faces.append(np.asarray(f) + offset)
+        objects.append(np.full(len(f), obj, dtype=np.int32))
+        materials.append(np.full(len(f), mat, dtype=np.int32))
+        offset += len(v)
+    core.add_mesh(
+        np.ascontiguousarray(np.concatenate(vertices), dtype=np.float64),
+        np.ascontiguousarray(np.concatenate(faces), dtype=np.int32),
+        None, acceleration, int(objects[0][0]), int(materials[0][0]),
+        np.ascontiguousarray(np.concatenate(objects)),
+        np.ascontiguousarray(np.concatenate(materials)),
+    )  # fmt: skip
 
 
 ProgressCallback = Callable[[int, int], None]

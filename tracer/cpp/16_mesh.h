@@ -34,6 +34,9 @@ struct Mesh : Object {
     std::vector<BVHNode> nodes; // nodes[0] is the root; its box bounds the whole mesh
     std::vector<int> order;     // triangle indices in leaf order
     std::vector<Vec3> leaf_vertices; // each triangle's three vertices, in leaf order
+    // Where one mesh holds the flat triangles of several scene objects: each face's object and
+    // material (empty: all are this mesh's own).
+    std::vector<int> triangle_object, triangle_material;
 
     // -- building -------------------------------------------------------------------------
     AABB triangle_box(int t) const {
@@ -217,8 +220,8 @@ struct Mesh : Object {
             double len = length(n);
             if (len > 0) hit.N = n / len;
         }
-        hit.object = object;
-        hit.material = material;
+        hit.object = triangle_object.empty() ? object : triangle_object[size_t(t)];
+        hit.material = triangle_material.empty() ? material : triangle_material[size_t(t)];
         return true;
     }
 

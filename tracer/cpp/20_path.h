@@ -193,7 +193,11 @@ struct PathContext {
         int n_objects = 0;
         for (const Sphere &sp : s.spheres) n_objects = std::max(n_objects, sp.object + 1);
         for (const Plane &pl : s.planes) n_objects = std::max(n_objects, pl.object + 1);
-        for (const auto &o : s.objects) n_objects = std::max(n_objects, o->object + 1);
+        for (const auto &o : s.objects) {
+            n_objects = std::max(n_objects, o->object + 1);
+            if (const auto *mesh = dynamic_cast<const Mesh *>(o.get())) // a joined mesh
+                for (int k : mesh->triangle_object) n_objects = std::max(n_objects, k + 1);
+        }
         area_light_of_object.assign(size_t(n_objects), -1);
         for (const Sphere &sp : s.spheres) {
             const Material &m = s.materials[size_t(sp.material)];

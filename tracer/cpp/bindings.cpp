@@ -233,7 +233,9 @@ NB_MODULE(_core, m) {
             [](rt::Scene &s, nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig> vertices,
                nb::ndarray<const int32_t, nb::shape<-1, 3>, nb::c_contig> faces,
                std::optional<nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig>> normals,
-               const std::string &acceleration, int object, int material) {
+               const std::string &acceleration, int object, int material,
+               std::optional<nb::ndarray<const int32_t, nb::shape<-1>, nb::c_contig>> objects,
+               std::optional<nb::ndarray<const int32_t, nb::shape<-1>, nb::c_contig>> materials) {
                 auto mesh = std::make_shared<rt::Mesh>();
                 size_t nv = vertices.shape(0), nf = faces.shape(0);
                 mesh->vertices.resize(nv);
@@ -255,6 +257,12 @@ NB_MODULE(_core, m) {
                     for (size_t i = 0; i < nv; ++i)
                         mesh->normals[i] = {(*normals)(i, 0), (*normals)(i, 1), (*normals)(i, 2)};
                 }
+                if (objects && materials) { // one mesh standing for several objects
+                    if (objects->shape(0) != nf || materials->shape(0) != nf)
+                        throw std::invalid_argument("one object and material per face expected");
+                    mesh->triangle_object.assign(objects->data(), objects->data() + nf);
+                    mesh->triangle_material.assign(materials->data(), materials->data() + nf);
+                }
                 mesh->acceleration = acceleration == "none"           ? rt::Acceleration::none
                                      : acceleration == "bounding_box" ? rt::Acceleration::bounding_box
                                                                       : rt::Acceleration::bvh;
@@ -267,7 +275,9 @@ NB_MODULE(_core, m) {
                 return mesh->nodes.size();
             },
             "vertices"_a, "faces"_a, "normals"_a.none(), "acceleration"_a, "object"_a,
-            "material"_a, "Add a triangle mesh; returns the number of hierarchy nodes.")
+            "material"_a, "objects"_a.none() = nb::none(), "materials"_a.none() = nb::none(),
+            "Add a triangle mesh (with per-face objects and materials where it joins several); "
+            "returns the number of hierarchy nodes.")
         .def(
             "primary_ray",
             [](const rt::Scene &s, double sx, double sy) {
