@@ -133,3 +133,11 @@ def test_classic_convergence_includes_povray():
     for name in ("rtlab", "povray"):
         err = {r["spp"]: r["value"] for r in rows if r["renderer"] == name}
         assert err[9] < err[1]  # antialiasing converges toward the reference
+
+
+def test_povray_refuses_path_scenes(tmp_path, capsys):
+    cornell = ROOT / "reference" / "scenes" / "cornell_box.toml"
+    assert main(["convert", str(cornell), "--to", "povray", "-o", str(tmp_path / "c.pov")]) == 2
+    assert "POV-Ray reproduces the classic model only" in capsys.readouterr().err
+    assert main(["compare", str(cornell), "--against", "povray"]) == 2
+    assert not (tmp_path / "c.pov").exists()

@@ -122,9 +122,19 @@ def cmd_demo(args: argparse.Namespace) -> None:
     print(f"heat maps: {out}/ex25-diff-*.png; metrics: {out}/ex25-metrics.json")
 
 
+def _classic_only(scene: Scene, what: str) -> None:
+    if scene.render.integrator != "classic":
+        raise SceneError(
+            scene.source, "render.integrator",
+            f"{what} reproduces the classic model only, and this scene's integrator is "
+            f"{scene.render.integrator!r} (path scenes convert to Mitsuba)",
+        )  # fmt: skip
+
+
 def cmd_convert(args: argparse.Namespace) -> None:
     scene = _apply_overrides(load_scene(args.scene), args)
     if args.to == "povray":
+        _classic_only(scene, "POV-Ray")
         from converters.povray import write_povray
 
         path = write_povray(scene, args.output)
@@ -146,6 +156,11 @@ def cmd_compare(args: argparse.Namespace) -> None:
         if name not in REFERENCES:
             raise SceneError("--against", "", f"unknown renderer {name!r}; expected {REFERENCES}")
     scene = _apply_overrides(load_scene(args.scene), args)
+    if "povray" in against:
+        _classic_only(scene, "POV-Ray")
+    if scene.render.integrator == "aov":
+        message = "an aov scene has no image to compare; render it with rtlab render"
+        raise SceneError(scene.source, "render.integrator", message)
     rows = compare_scene(
         scene, against, out_dir=args.out_dir, json_path=args.json, threads=args.threads
     )
