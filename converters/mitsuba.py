@@ -23,7 +23,6 @@ message saying why.
 
 from __future__ import annotations
 
-import math
 import os
 import sys
 from pathlib import Path
@@ -848,10 +847,6 @@ def write_mitsuba_xml(scene: Scene, path: str | os.PathLike[str]) -> Path:
     with atomic_path(path) as tmp:
         tmp.write_text("\n".join(lines) + "\n")
     return path
-
-
-def horizontal_fov(fov_y: float, width: int, height: int) -> float:
-    return math.degrees(2 * math.atan(width / height * math.tan(math.radians(fov_y) / 2)))
 
 
 _register_all()

@@ -51,13 +51,17 @@ def default_threads() -> int:
         return os.cpu_count() or 1
 
 
+def _set_render(core: _core.Scene, scene: Scene) -> None:
+    r = scene.render
+    core.set_render(r.max_depth, r.min_coefficient, r.spp, r.seed, r.background, r.ambient_light)
+
+
 def to_core(scene: Scene) -> _core.Scene:
     """Fill a C++ core scene from the validated model."""
     core = _core.Scene()
     c = scene.camera
     core.set_camera(c.eye, c.look_at, c.up, c.fov_y, c.width, c.height)
-    r = scene.render
-    core.set_render(r.max_depth, r.min_coefficient, r.spp, r.seed, r.background, r.ambient_light)
+    _set_render(core, scene)
     index = {}
     for name, m in scene.materials.items():
         index[name] = core.add_material(
@@ -123,7 +127,7 @@ def _add_flat_triangles(core: _core.Scene, parts: list, acceleration: str) -> No
 ProgressCallback = Callable[[int, int], None]
 
 
-def _progress_bar(total_pixels: int) -> tuple[ProgressCallback, Callable[[], None]]:
+def _progress_bar() -> tuple[ProgressCallback, Callable[[], None]]:
     from tqdm import tqdm
 
     bar = tqdm(total=100, unit="%", desc="render", leave=False, file=sys.stderr, delay=0.5)
@@ -133,6 +137,31 @@ def _progress_bar(total_pixels: int) -> tuple[ProgressCallback, Callable[[], Non
         bar.refresh()
 
     return update, bar.close
+
+
+def _check_threads(threads: int | None) -> int:
+    if threads is None:
+        threads = default_threads()
+    if threads < 1:
+        raise ValueError(f"threads must be at least 1, got {threads}")
+    return threads
+
+
+def _render_core(
+    scene: Scene, core: _core.Scene, threads: int, progress: bool | None, packets: bool
+) -> RenderResult:
+    """Render a core scene already built from ``scene`` (its hierarchies included)."""
+    if progress is None:
+        progress = sys.stderr.isatty()
+    callback, close = _progress_bar() if progress else (None, lambda: None)
+    start = time.perf_counter()
+    try:
+        aov = scene.render.integrator == "aov"
+        path = scene.render.integrator == "path"
+        image, rays = _core.render(core, threads, callback, packets, aov, path)
+    finally:
+        close()
+    return RenderResult(image, dict(rays), time.perf_counter() - start, threads)
 
 
 def render_with_stats(
@@ -147,29 +176,8 @@ def render_with_stats(
     ``packets=False`` traces one ray at a time, the lecture's code as written; the default
     traces packets of rays with SIMD instructions. Both give the same image, bit for bit.
     """
-    if threads is None:
-        threads = default_threads()
-    if threads < 1:
-        raise ValueError(f"threads must be at least 1, got {threads}")
-    if progress is None:
-        progress = sys.stderr.isatty()
-    core = to_core(scene)
-    callback, close = (
-        _progress_bar(scene.camera.width * scene.camera.height)
-        if progress
-        else (
-            None,
-            lambda: None,
-        )
-    )
-    start = time.perf_counter()
-    try:
-        aov = scene.render.integrator == "aov"
-        path = scene.render.integrator == "path"
-        image, rays = _core.render(core, threads, callback, packets, aov, path)
-    finally:
-        close()
-    return RenderResult(image, dict(rays), time.perf_counter() - start, threads)
+    threads = _check_threads(threads)
+    return _render_core(scene, to_core(scene), threads, progress, packets)
 
 
 def render(
@@ -200,15 +208,16 @@ def render_progressive(
 
     if scene.render.integrator == "aov":
         raise ValueError("an aov render has nothing to refine: render it once")
+    threads = _check_threads(threads)
     start = time.perf_counter()
+    core = to_core(scene)  # once: the passes differ only in their seed
     total: npt.NDArray[np.float64] | None = None
     rays: dict[str, int] = {}
     passes = 0
     while True:
         seed = (scene.render.seed * 1_000_003 + passes) % 2**64
-        result = render_with_stats(
-            scene.with_overrides(seed=seed), threads=threads, progress=progress
-        )
+        _set_render(core, scene.with_overrides(seed=seed))
+        result = _render_core(scene, core, threads, progress, True)
         total = result.image.astype(np.float64) if total is None else total + result.image
         for key, value in result.rays.items():
             rays[key] = rays.get(key, 0) + value

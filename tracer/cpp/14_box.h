@@ -35,30 +35,13 @@ struct AABB {
     }
 };
 
-// The overlap (t_near, t_far) of the ray with the box's three slabs, clipped to range; false
-// when it is empty. inv_d is 1/d per component (infinite for a zero component: IEEE division
-// then gives +-infinity slabs, the right limit).
-inline bool slab_test(const AABB &box, const Vec3 &o, const Vec3 &inv_d, const Interval &range,
-                      double &t_near, double &t_far) {
-    t_near = range.min, t_far = range.max;
-    for (int axis = 0; axis < 3; ++axis) {
-        double t0 = (box.min[axis] - o[axis]) * inv_d[axis];
-        double t1 = (box.max[axis] - o[axis]) * inv_d[axis];
-        if (t0 > t1) std::swap(t0, t1);
-        t1 *= 1 + 2 * gamma(3);
-        // Written so that a NaN (0 * infinity, a ray in a slab's plane) leaves t unchanged.
-        t_near = t0 > t_near ? t0 : t_near;
-        t_far = t1 < t_far ? t1 : t_far;
-        if (t_near > t_far) return false;
-    }
-    return true;
-}
-
 inline Vec3 reciprocal(const Vec3 &d) { return {1 / d.x, 1 / d.y, 1 / d.z}; }
 
-// The same test for a ray that meets many boxes (the hierarchy): with the signs of 1/d known,
-// the near and far plane of each slab are picked directly instead of swapped (Williams, Barrus,
-// Morley and Shirley, "An Efficient and Robust Ray-Box Intersection Algorithm", 2005).
+// The ray as the slab test needs it, computed once for the many boxes it meets: 1/d per
+// component (infinite for a zero component: IEEE division then gives +-infinity slabs, the
+// right limit), and the signs of 1/d, which pick the near and far plane of each slab directly
+// instead of swapping (Williams, Barrus, Morley and Shirley, "An Efficient and Robust Ray-Box
+// Intersection Algorithm", 2005).
 struct SlabRay {
     Vec3 o, inv_d, inv_d_far; // inv_d_far = inv_d (1 + 2 gamma(3)): the far end's widening,
                               // applied once per ray (one more rounding, inside the margin)
@@ -68,6 +51,7 @@ struct SlabRay {
           near_x(inv_d.x < 0), near_y(inv_d.y < 0), near_z(inv_d.z < 0) {}
 };
 
+// Whether the ray overlaps the box's three slabs within range; t_near is where it enters.
 inline bool slab_test(const AABB &box, const SlabRay &r, const Interval &range, double &t_near) {
     const Vec3 *planes = &box.min; // planes[0] = min, planes[1] = max
     double tx0 = (planes[r.near_x].x - r.o.x) * r.inv_d.x;
@@ -76,7 +60,8 @@ inline bool slab_test(const AABB &box, const SlabRay &r, const Interval &range, 
     double ty1 = (planes[1 - r.near_y].y - r.o.y) * r.inv_d_far.y;
     double tz0 = (planes[r.near_z].z - r.o.z) * r.inv_d.z;
     double tz1 = (planes[1 - r.near_z].z - r.o.z) * r.inv_d_far.z;
-    // As above, comparisons written so that a NaN slab (0 * infinity) leaves t unchanged.
+    // Comparisons written so that a NaN slab (0 * infinity, a ray in a slab's plane) leaves the
+    // interval unchanged.
     double lo = range.min, hi = range.max;
     lo = tx0 > lo ? tx0 : lo, hi = tx1 < hi ? tx1 : hi;
     lo = ty0 > lo ? ty0 : lo, hi = ty1 < hi ? ty1 : hi;

@@ -23,7 +23,6 @@ struct BVHNode {
     AABB bounds;
     int first = 0;  // leaf: first triangle (in Mesh::order); inner: index of the second child
     int count = 0;  // triangles in a leaf; 0 for an inner node, whose first child follows it
-    int axis = 0;   // inner: the axis it was split along (visit the nearer child first)
 };
 
 struct Mesh : Object {
@@ -139,7 +138,6 @@ struct Mesh : Object {
                        best_bin;
             });
         int left = int(middle - order.begin()) - first;
-        nodes[size_t(index)].axis = best_axis;
         int left_index = int(nodes.size());
         nodes.emplace_back();
         build_node(left_index, first, left, depth + 1, boxes, centres);

@@ -60,7 +60,6 @@ inline Vec3 sample_sphere(double u1, double u2) { // uniform: pdf = 1 / (4 pi)
     return {r * std::cos(phi), r * std::sin(phi), z};
 }
 
-inline double luminance(const Color &c) { return 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b; }
 inline double max_component(const Color &c) { return std::max(c.r, std::max(c.g, c.b)); }
 inline bool is_black(const Color &c) { return c.r == 0 && c.g == 0 && c.b == 0; }
 
