@@ -11,7 +11,7 @@ radiance is its XYZ converted to linear sRGB, scaled so that a flat spectrum of 
 unit has luminance 1. (RGB rendering of a product of spectra is an
 approximation however it is done; this one is exact for single reflections of this light.)
 
-Run ``python -m reference.cornell_measured`` to print the values; tests/test_path_stats.py
+Run ``python -m reference.cornell_measured`` to print the values; tests/reference/test_path_stats.py
 checks that reference/scenes/cornell_measured.toml holds them.
 """
 

@@ -7,7 +7,7 @@
 // 09_scene.h and 10_classic.h with the same operations in the same order, so each lane computes
 // bit for bit what the one-ray code computes (IEEE-754 add, mul, div and sqrt are correctly
 // rounded in vector units too, and the build forbids fused multiply-add contraction).
-// tests/test_packet.py renders every canonical scene both ways and requires equal images.
+// tests/tracer/test_packet.py renders every canonical scene both ways and requires equal images.
 // Where lanes disagree (one hits a sphere, the next a plane), masks choose per lane; a lane whose
 // ray has finished is masked off until the whole packet is done.
 #pragma once

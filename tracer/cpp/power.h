@@ -10,7 +10,7 @@
 // ln 2 is split into a head with zeros in its low bits and a tail (Cody and Waite), so k ln 2 is
 // subtracted without rounding error. The one error that grows is ln x's rounding (2^-53
 // relative), multiplied by n: the result's relative error is about |n ln x| 2^-53, at most
-// ~2e-13 where the result is still above 2^-1022 (tests/test_stiff.py checks 5e-13 against
+// ~2e-13 where the result is still above 2^-1022 (tests/tracer/test_stiff.py checks 5e-13 against
 // libm's pow), far below the 8e-6 that any comparison here can see. Only 0 < x <= 1 and n > 0
 // occur (a cosine and a positive exponent); results below 2^-1022 are flushed to 0.
 #pragma once

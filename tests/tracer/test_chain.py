@@ -13,7 +13,7 @@ from __future__ import annotations
 import pytest
 
 import tracer
-from tests.conftest import material, plane, scene_dict, sphere
+from tests.helpers import material, plane, scene_dict, sphere
 
 A = {"color": [1.0, 0.5, 0.25], "ambient": 0.4, "reflectivity": 0.5}
 B = {"color": [0.2, 1.0, 0.6], "ambient": 0.3, "reflectivity": 0.8}

@@ -5,20 +5,13 @@ difference at all is a bug in the packet code."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
 import tracer
-from tests.conftest import material, scene_dict, sphere
+from tests.helpers import classic_scenes, material, scene_dict, sphere
 
-# The classic-model scenes (the path-traced ones are checked statistically, tests/test_path*).
-SCENES = [
-    p
-    for p in sorted(Path(__file__).resolve().parents[1].glob("reference/scenes/*.toml"))
-    if tracer.load_scene(p).render.integrator == "classic"
-]
+CLASSIC = classic_scenes()
 
 
 def both(scene):
@@ -27,7 +20,7 @@ def both(scene):
     return a, b
 
 
-@pytest.mark.parametrize("path", SCENES, ids=[p.stem for p in SCENES])
+@pytest.mark.parametrize("path", CLASSIC, ids=[p.stem for p in CLASSIC])
 @pytest.mark.parametrize("spp", [1, 3])
 def test_packets_equal_single_rays(path, spp):
     scene = tracer.load_scene(path).with_overrides(width=97, height=61, spp=spp, seed=3)

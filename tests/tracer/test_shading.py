@@ -15,7 +15,7 @@ from __future__ import annotations
 import pytest
 
 import tracer
-from tests.conftest import material, scene_dict, sphere
+from tests.helpers import material, scene_dict, sphere
 
 REL = 1e-6
 LIGHT = {"type": "point", "position": [3.0, 0.0, 5.0], "color": [1.0, 0.5, 0.25]}

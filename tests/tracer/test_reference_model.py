@@ -8,7 +8,7 @@ import pytest
 
 import tracer
 from tests import classic_reference
-from tests.conftest import material, plane, scene_dict, sphere
+from tests.helpers import material, plane, scene_dict, sphere
 from tracer.cli import demo_scene_path
 
 # Tolerance: the core returns float32 (relative rounding 6e-8 on values up to ~2) and both

@@ -26,15 +26,11 @@ from reference.metrics import (
 )
 from reference.mitsuba import run_mitsuba
 from reference.povray import run_povray
+from tests.helpers import classic_scenes
 from tracer.scene import Torus
 
-# The classic-model scenes (the path-traced ones are checked statistically, tests/test_path*).
-SCENES = [
-    p
-    for p in sorted(Path(__file__).resolve().parents[1].glob("reference/scenes/*.toml"))
-    if tracer.load_scene(p).render.integrator == "classic"
-]
-IDS = [p.stem for p in SCENES]
+CLASSIC = classic_scenes()
+IDS = [p.stem for p in CLASSIC]
 
 
 @cache
@@ -60,7 +56,7 @@ def test_there_are_canonical_scenes():
     assert {"bunny", "bunny_smooth", "boxes_triangles", "torus_cylinder", "inside_mesh"} <= names
 
 
-@pytest.mark.parametrize("path", SCENES, ids=IDS)
+@pytest.mark.parametrize("path", CLASSIC, ids=IDS)
 def test_matches_povray(path):
     scene, ours = scene_and_image(path)
     pov = run_povray(scene, threads=2)
@@ -68,7 +64,7 @@ def test_matches_povray(path):
     assert ok, f"{path.name} vs POV-Ray: {text}"
 
 
-@pytest.mark.parametrize("path", SCENES, ids=IDS)
+@pytest.mark.parametrize("path", CLASSIC, ids=IDS)
 def test_matches_mitsuba_llvm(path):
     scene, ours = scene_and_image(path)
     result = run_mitsuba(scene, variant="llvm_ad_rgb", warm=False)
@@ -77,7 +73,7 @@ def test_matches_mitsuba_llvm(path):
     assert ok, f"{path.name} vs Mitsuba llvm_ad_rgb: {text}"
 
 
-@pytest.mark.parametrize("path", SCENES, ids=IDS)
+@pytest.mark.parametrize("path", CLASSIC, ids=IDS)
 def test_matches_mitsuba_scalar(path):
     """scalar_rgb runs the Python integrator once per ray: a smaller image keeps it quick.
     Silhouette pixels grow with an image's width, all pixels with its area: at 64 pixels wide
@@ -91,10 +87,10 @@ def test_matches_mitsuba_scalar(path):
 def test_the_comparisons_are_not_vacuous():
     """Each canonical scene is a real picture, and in the mirrors scene both max_depth and
     min_coefficient change over a thousand pixels, so a renderer ignoring either would fail."""
-    for path in SCENES:
+    for path in CLASSIC:
         _, image = scene_and_image(path)
         assert image.std() > 0.02, path.name
-    scene, image = scene_and_image(SCENES[IDS.index("mirrors")])
+    scene, image = scene_and_image(CLASSIC[IDS.index("mirrors")])
     deeper = tracer.render(scene.with_overrides(max_depth=30), threads=2)
     data = scene.to_dict()
     data["render"]["min_coefficient"] = 0.0

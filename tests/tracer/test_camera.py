@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import tracer
-from tests.conftest import material, scene_dict, sphere
+from tests.helpers import material, scene_dict, sphere
 from tracer.render import to_core
 
 

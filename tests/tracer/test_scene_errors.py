@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 import tracer
-from tests.conftest import scene_dict, sphere
+from tests.helpers import scene_dict, sphere
 from tracer.scene import SceneError
 
 GOOD = """

@@ -5,7 +5,6 @@ mirrored image, a wrong field of view, a missing light, a wrong trace depth) and
 from __future__ import annotations
 
 import re
-from pathlib import Path
 
 import pytest
 
@@ -14,8 +13,9 @@ from converters.povray import to_povray
 from reference.metrics import FLOAT32_SLACK, MITSUBA_TOLERANCE, agrees
 from reference.mitsuba import run_mitsuba
 from reference.povray import run_povray
+from tests.helpers import SCENES
 
-SCENE = Path(__file__).resolve().parents[1] / "reference" / "scenes" / "ex25.toml"
+SCENE = SCENES / "ex25.toml"
 
 
 @pytest.fixture(scope="module")
@@ -92,13 +92,10 @@ def test_a_wrong_mitsuba_conversion_fails(scene_and_image, bug):
     assert not ok, f"{bug} went unnoticed: {text}"
 
 
-GEOMETRY = Path(__file__).resolve().parents[1] / "reference" / "scenes"
-
-
 def test_a_wrong_geometry_conversion_fails():
     """Geometry converters too: a torus left lying in POV-Ray's own xz plane, a mesh whose
     smooth normals are dropped, and a box given Mitsuba's cube without its scale each fail."""
-    tori = tracer.load_scene(GEOMETRY / "torus_cylinder.toml").with_overrides(width=96, height=72)
+    tori = tracer.load_scene(SCENES / "torus_cylinder.toml").with_overrides(width=96, height=72)
     ours = tracer.render(tori, threads=2)
     sdl = to_povray(tori)
     wrong = re.sub(r"(torus \{[^}]*?sturm texture \{ \w+ \}) matrix <[^>]*>", r"\1", sdl, count=1)
@@ -106,7 +103,7 @@ def test_a_wrong_geometry_conversion_fails():
     pov = run_povray(tori, threads=2, sdl=wrong)
     assert not agrees(pov.image, ours, pov.error_bound + FLOAT32_SLACK)[0]
 
-    smooth = tracer.load_scene(GEOMETRY / "bunny_smooth.toml").with_overrides(width=96, height=72)
+    smooth = tracer.load_scene(SCENES / "bunny_smooth.toml").with_overrides(width=96, height=72)
     ours = tracer.render(smooth, threads=2)
     sdl = to_povray(smooth)
     wrong = re.sub(r"  normal_vectors \{.*?\n  \}\n", "", sdl, count=1, flags=re.S)
@@ -114,7 +111,7 @@ def test_a_wrong_geometry_conversion_fails():
     pov = run_povray(smooth, threads=2, sdl=wrong)
     assert not agrees(pov.image, ours, pov.error_bound + FLOAT32_SLACK)[0]
 
-    boxes = tracer.load_scene(GEOMETRY / "boxes_triangles.toml").with_overrides(width=96, height=72)
+    boxes = tracer.load_scene(SCENES / "boxes_triangles.toml").with_overrides(width=96, height=72)
     ours = tracer.render(boxes, threads=2)
 
     def unscaled_cube(d):

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import tracer
-from tests.conftest import material, scene_dict, sphere
+from tests.helpers import material, scene_dict, sphere
 from tracer import _core
 from tracer.render import to_core
 

@@ -3,16 +3,14 @@ rasteriser (pyrender, offscreen) and Mitsuba's own aov integrator, on the geomet
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
 import tracer
 from reference.geometry import mitsuba_geometry, pyrender_geometry, rtlab_geometry
 from reference.metrics import MAX_SHARE_OVER
+from tests.helpers import SCENES
 
-SCENES = Path(__file__).resolve().parents[1] / "reference" / "scenes"
 NAMES = ["bunny", "bunny_smooth", "boxes_triangles", "torus_cylinder", "inside_mesh", "ex25"]
 
 

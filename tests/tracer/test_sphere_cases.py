@@ -10,7 +10,7 @@ from __future__ import annotations
 import pytest
 
 import tracer
-from tests.conftest import material, scene_dict, sphere
+from tests.helpers import material, scene_dict, sphere
 from tracer import _core
 
 C, R = (0.0, 0.0, 0.0), 1.0

@@ -4,14 +4,12 @@ box and on a scene of glossy, mirror and mixed materials lit by every kind of em
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import pytest
 
 import tracer
 from reference.stats import aggregate_test, biased, mitsuba_reference, pixel_test, study
+from tests.helpers import SCENES
 
-SCENES = Path(__file__).resolve().parents[1] / "reference" / "scenes"
 SPP, REPLICATES, REFERENCE_SPP = 64, 6, 4096
 
 

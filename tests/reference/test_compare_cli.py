@@ -13,10 +13,10 @@ import pytest
 import tracer
 from reference.bench import format_ratios, suite_classic
 from reference.metrics import MITSUBA_TOLERANCE, agrees
+from tests.helpers import ROOT, SCENES
 from tracer.cli import main
 
-ROOT = Path(__file__).resolve().parents[1]
-SHADOWS = ROOT / "reference" / "scenes" / "shadows.toml"
+SHADOWS = SCENES / "shadows.toml"
 
 
 def test_convert_writes_povray_sdl(tmp_path, capsys):
@@ -33,7 +33,7 @@ def test_mitsuba_xml_loads_in_a_fresh_process_and_renders_the_same(tmp_path, nam
     """The XML written by `convert` (with its meshes as PLY files beside it) loads with
     mi.load_file in any process that imported converters.mitsuba, and renders what the dict
     conversion renders."""
-    source = ROOT / "reference" / "scenes" / f"{name}.toml"
+    source = SCENES / f"{name}.toml"
     xml = tmp_path / "s.xml"
     args = ["convert", str(source), "--to", "mitsuba", "-o", str(xml), "--quiet",
             "--width", "80", "--height", "60"]  # fmt: skip
@@ -136,7 +136,7 @@ def test_classic_convergence_includes_povray():
 
 
 def test_povray_refuses_path_scenes(tmp_path, capsys):
-    cornell = ROOT / "reference" / "scenes" / "cornell_box.toml"
+    cornell = SCENES / "cornell_box.toml"
     assert main(["convert", str(cornell), "--to", "povray", "-o", str(tmp_path / "c.pov")]) == 2
     assert "POV-Ray reproduces the classic model only" in capsys.readouterr().err
     assert main(["compare", str(cornell), "--against", "povray"]) == 2

@@ -5,14 +5,13 @@ from __future__ import annotations
 
 import math
 import random
-from pathlib import Path
 
 import numpy as np
 import pytest
 import trimesh
 
 import tracer
-from tests.conftest import material, scene_dict, sphere
+from tests.helpers import SCENES, material, scene_dict, sphere
 from tracer.cli import main
 from tracer.render import to_core
 
@@ -284,9 +283,9 @@ def test_hierarchy_keeps_leaves_small_on_the_bunny():
     """A binned SAH hierarchy over the bunny's 99,785 triangles: a primary ray tests a handful
     of triangles, not hundreds (an empty bin once poisoned every split cost, leaving leaves of
     up to 70 triangles; this bound would have caught it)."""
-    scene = tracer.load_scene(
-        Path(__file__).resolve().parents[1] / "reference" / "scenes" / "bunny.toml"
-    ).with_overrides(width=96, height=64, integrator="aov")
+    scene = tracer.load_scene(SCENES / "bunny.toml").with_overrides(
+        width=96, height=64, integrator="aov"
+    )
     rays = tracer.render_with_stats(scene, threads=2).rays
     assert rays["primitive_tests"] / rays["primary"] < 10
     assert rays["box_tests"] / rays["primary"] < 30

@@ -9,14 +9,12 @@ sample counts)."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 import trimesh
 
 import tracer
-from tests.conftest import material, plane, scene_dict, sphere
+from tests.helpers import SCENES, material, plane, scene_dict, sphere
 
 Z = 4.5
 
@@ -150,9 +148,9 @@ def test_max_depth_counts_as_mitsuba_does():
 
 
 def test_same_image_whatever_the_thread_count():
-    scene = tracer.load_scene(
-        Path(__file__).resolve().parents[1] / "reference" / "scenes" / "cornell_box.toml"
-    ).with_overrides(width=40, height=40, spp=4)
+    scene = tracer.load_scene(SCENES / "cornell_box.toml").with_overrides(
+        width=40, height=40, spp=4
+    )
     images = [tracer.render(scene, threads=t) for t in (1, 2, 5)]
     assert np.array_equal(images[0], images[1]) and np.array_equal(images[0], images[2])
     other = tracer.render(scene.with_overrides(seed=1), threads=2)
@@ -162,9 +160,9 @@ def test_same_image_whatever_the_thread_count():
 def test_progressive_rendering_spends_its_budget_in_whole_passes():
     from tracer.render import render_progressive, render_with_stats
 
-    scene = tracer.load_scene(
-        Path(__file__).resolve().parents[1] / "reference" / "scenes" / "cornell_box.toml"
-    ).with_overrides(width=24, height=24, spp=2)
+    scene = tracer.load_scene(SCENES / "cornell_box.toml").with_overrides(
+        width=24, height=24, spp=2
+    )
     once = render_progressive(scene, 1e-6, threads=2)  # the budget is gone after one pass
     assert once.rays["primary"] == 24 * 24 * 2
     first_pass = render_with_stats(scene.with_overrides(seed=0), threads=2).image

@@ -13,7 +13,7 @@ import math
 import pytest
 
 import tracer
-from tests.conftest import material, plane, scene_dict, sphere
+from tests.helpers import material, plane, scene_dict, sphere
 
 CAM = {"eye": [0, 10, 0], "look_at": [0, 0, 0], "up": [0, 0, -1]}
 FLOOR = material(color=[1.0, 1.0, 1.0], ambient=0.1, diffuse=0.8)
