@@ -45,6 +45,58 @@ def test_render_writes_each_format(tmp_path, suffix):
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
 
 
+# sRGB (IEC 61966-2-1): V = 12.92 L for L <= 0.0031308, else 1.055 L^(1/2.4) - 0.055. The bytes
+# below were computed apart from tracer.image, with Python's decimal module at 40 digits from
+# that formula as the standard writes it, then rounded to the nearest of 255 steps (255 V
+# shown to 4 places). A plain 2.2 gamma gives the bytes in the last column: 0.5 -> 186,
+# 0.18 -> 117, 0.0031308 -> 19, 0.001 -> 11; and 128 -> 0.2158605 is the value the sRGB
+# literature tabulates for mid-grey code 128.
+SRGB_BYTES = [  # linear value, 255 V, the byte; (plain 2.2 gamma's byte)
+    (0.0, 0.0, 0),  # (0)
+    (0.001, 3.2946, 3),  # (11) on the linear segment: 12.92 * 0.001 * 255
+    (0.0031308, 10.3147, 10),  # (19) the segments' joint: 0.04045 * 255
+    (0.05, 63.1891, 63),  # (65)
+    (0.18, 117.6458, 118),  # (117) photographic mid-grey
+    (0.5, 187.5160, 188),  # (186)
+    (0.8, 231.1146, 231),  # (230)
+    (1.0, 255.0, 255),  # (255)
+]
+SRGB_DECODED = [  # byte, its linear value (the same decimal computation, 10 digits)
+    (1, 0.0003035270),
+    (10, 0.0030352698),
+    (64, 0.0512694584),
+    (118, 0.1811642442),
+    (128, 0.2158605001),
+    (188, 0.5028864580),
+    (255, 1.0),
+]
+
+
+def test_png_holds_the_srgb_bytes_of_the_standard(tmp_path):
+    """The PNG's bytes themselves, read back with Pillow alone, not through our decoder (which a
+    wrong encoder would mirror: a 2.2 gamma pair round-trips as well as sRGB does)."""
+    from PIL import Image
+
+    linear = np.array([[[v, v, v] for v, _, _ in SRGB_BYTES]], dtype=np.float32)
+    out = tracer.save_image(tmp_path / "ramp.png", linear)
+    with Image.open(out) as im:
+        assert im.mode == "RGB"
+        got = np.asarray(im)[0, :, 0].tolist()
+    assert got == [byte for _, _, byte in SRGB_BYTES]
+
+
+def test_png_bytes_decode_to_the_linear_values_of_the_standard(tmp_path):
+    """An 8-bit PNG written by Pillow alone, decoded by load_image. Tolerance: the result is
+    float32, one rounding of a value up to 1, 2^-24 relative ~ 6e-8; 1e-7 absolute holds it
+    and is 3,000 times below the smallest gap to a 2.2 gamma's value here (3e-4, at byte 1)."""
+    from PIL import Image
+
+    row = np.array([[[b, b, b] for b, _ in SRGB_DECODED]], dtype=np.uint8)
+    Image.fromarray(row, mode="RGB").save(tmp_path / "bytes.png")
+    got = tracer.load_image(tmp_path / "bytes.png")[0, :, 1]
+    assert got.tolist() == pytest.approx([v for _, v in SRGB_DECODED], abs=1e-7)
+
+
 def test_exr_has_rgb_float_channels(tmp_path):
     import OpenEXR
 
