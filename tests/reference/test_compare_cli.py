@@ -71,9 +71,56 @@ def test_compare_writes_images_heat_maps_and_json(tmp_path, capsys):
                     "trace_seconds", "whole_seconds"):  # fmt: skip
             assert key in r, key
         assert r["rmse"] < 1e-4 and r["ssim"] > 0.999 and r["over_tolerance"] <= 0.0005
+        assert r["agrees"] is True, r["verdict"]
         assert Path(r["heat_map"]).exists()
     names = {p.name for p in out.iterdir()}
     assert {"shadows-rtlab.exr", "shadows-povray.png", "shadows-diff-mitsuba-llvm.png"} <= names
+
+
+def test_compare_exits_1_when_the_renderers_disagree(tmp_path, capsys, monkeypatch):
+    """A converter bug (the picture mirrored: ``right x`` for ``right -x``) injected into the
+    SDL that `rtlab compare` hands POV-Ray: the real POV-Ray renders it, the rule rejects it,
+    and the exit status says so."""
+    import converters.povray
+
+    def mirrored(scene, path):
+        sdl = converters.povray.to_povray(scene)
+        wrong = sdl.replace("right -x*", "right x*")
+        assert wrong != sdl, "the bug was not injected"
+        Path(path).write_text(wrong)
+        return Path(path)
+
+    monkeypatch.setattr("reference.povray.write_povray", mirrored)
+    js = tmp_path / "m.json"
+    args = ["compare", str(SHADOWS), "--against", "povray", "--json", str(js),
+            "--width", "80", "--height", "60", "--quiet"]  # fmt: skip
+    assert main(args) == 1
+    out, err = capsys.readouterr()
+    assert "rtlab: povray disagrees with rtlab:" in err and "pixels" in err
+    assert "exit status 1" in err
+    assert next(ln for ln in out.splitlines() if ln.startswith("povray")).endswith("NO")
+    row = json.loads(js.read_text())[1]
+    assert (
+        row["renderer"] == "povray"
+        and row["agrees"] is False
+        and "over tolerance" in row["verdict"]
+    )
+
+
+def test_compare_gives_no_verdict_on_jittered_samples(capsys):
+    """At spp > 1 each renderer jitters its own samples (and POV-Ray here takes one per pixel):
+    no pixel rule applies, and compare says so rather than fail."""
+    args = ["compare", str(SHADOWS), "--against", "povray", "--spp", "4", "--width", "40",
+            "--height", "30", "--quiet"]  # fmt: skip
+    assert main(args) == 0
+    assert capsys.readouterr().out.splitlines()[-1].endswith("-")
+
+
+def test_compare_help_states_the_exit_status(capsys):
+    with pytest.raises(SystemExit):
+        main(["compare", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "1 when one disagrees" in text and "130 or 143" in text
 
 
 def test_compare_rejects_an_unknown_renderer(capsys):

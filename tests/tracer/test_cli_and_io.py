@@ -163,25 +163,131 @@ def test_failed_write_leaves_the_old_image(tmp_path, monkeypatch):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["keep.exr"]
 
 
-def test_interrupted_render_writes_nothing(tmp_path):
-    """Ctrl-C during a long render: exit 130, no output, no temporary file, old image kept."""
-    scene = small_demo(tmp_path, 4000, 3000)
+class Started:
+    """A child rtlab whose stderr is a terminal (a pseudo-terminal), so that it shows its
+    progress bar: the sign that the render is under way."""
+
+    def __init__(self, args: list[str], cwd: Path, env: dict[str, str] | None = None):
+        import fcntl
+        import pty
+        import struct
+        import termios
+
+        self.master, slave = pty.openpty()
+        # A new terminal is 0 columns wide, and a progress bar in 0 columns is empty: 24 x 80.
+        fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 80, 0, 0))
+        self.proc = subprocess.Popen([*RTLAB, *args], stdout=subprocess.PIPE, stderr=slave,
+                                     stdin=subprocess.DEVNULL, cwd=cwd, env=env)  # fmt: skip
+        os.close(slave)
+        self.err = b""
+
+    def read(self, timeout: float) -> bool:
+        """Read what the child wrote to its terminal; False at the end of it."""
+        import select
+
+        ready, _, _ = select.select([self.master], [], [], timeout)
+        if not ready:
+            return True
+        try:
+            data = os.read(self.master, 4096)
+        except OSError:  # EIO: the child closed its terminal
+            return False
+        self.err += data
+        return bool(data)
+
+    def wait_for(self, marker: bytes, timeout: float = 60.0) -> None:
+        deadline = time.monotonic() + timeout
+        while marker not in self.err:
+            assert time.monotonic() < deadline, f"no {marker!r} after {timeout} s: {self.err!r}"
+            assert self.proc.poll() is None, f"rtlab ended early: {self.err!r}"
+            self.read(0.1)
+
+    def finish(self, timeout: float = 60.0) -> tuple[int, str]:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline and self.read(0.2):
+            pass
+        self.proc.communicate(timeout=max(1.0, deadline - time.monotonic()))
+        os.close(self.master)
+        return self.proc.returncode, self.err.decode(errors="replace")
+
+
+SIGNALS = {
+    "SIGINT": (signal.SIGINT, 130, "SIGINT (Ctrl-C)"),
+    "SIGTERM": (signal.SIGTERM, 143, "SIGTERM"),
+}
+
+
+@pytest.mark.parametrize("name", SIGNALS)
+def test_interrupted_render_writes_nothing(tmp_path, name):
+    """SIGINT or SIGTERM during a long render: it is cancelled through the core's watcher (the
+    same path as Ctrl-C); exit 128 + the signal's number, one clear line, no output and no
+    temporary file, and the image that was there before is left alone."""
+    signum, status, said = SIGNALS[name]
+    scene = small_demo(tmp_path, 2000, 1500)  # some 30 s at 64 spp on one thread
     out = tmp_path / "big.exr"
     out.write_bytes(b"precious")
-    proc = subprocess.Popen(
-        [*RTLAB, "render", str(scene), "-o", str(out), "--spp", "64", "--threads", "1"],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
-    time.sleep(1.5)  # well into the render: python start-up and scene loading take ~0.3 s
-    assert proc.poll() is None, "the render finished too soon to be interrupted"
-    proc.send_signal(signal.SIGINT)
-    _, err = proc.communicate(timeout=30)
-    assert proc.returncode == 130, err
-    assert "interrupted" in err
+    child = Started(["render", str(scene), "-o", str(out), "--spp", "64", "--threads", "1"],
+                    tmp_path)  # fmt: skip
+    child.wait_for(b"render:")  # the progress bar: the render is under way (tqdm, delay 0.5 s)
+    child.proc.send_signal(signum)
+    code, err = child.finish()
+    assert code == status, err
+    assert f"rtlab: interrupted by {said}; no output written" in err
+    assert "Traceback" not in err
     assert out.read_bytes() == b"precious"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["big.exr", "demo.toml"]
+
+
+def test_interrupted_compare_writes_nothing(tmp_path):
+    """SIGTERM while `rtlab compare` renders: exit 143, one line, no image, heat map or JSON
+    written; an old metrics file stays as it was."""
+    scene = small_demo(tmp_path, 2000, 1500)
+    js = tmp_path / "metrics.json"
+    js.write_text("precious")
+    child = Started(["compare", str(scene), "--against", "povray", "--out-dir", "cmp",
+                     "--json", str(js), "--spp", "64", "--threads", "1"], tmp_path)  # fmt: skip
+    child.wait_for(b"render:")
+    child.proc.send_signal(signal.SIGTERM)
+    code, err = child.finish()
+    assert code == 143, err
+    assert "rtlab: interrupted by SIGTERM; no output written" in err
+    assert js.read_text() == "precious"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["demo.toml", "metrics.json"]
+
+
+def _children(pid: int) -> list[int]:
+    text = Path(f"/proc/{pid}/task/{pid}/children").read_text()
+    return [int(c) for c in text.split()]
+
+
+def test_interrupted_compare_stops_povray_and_leaves_no_temporary_files(tmp_path):
+    """Ctrl-C while POV-Ray renders for `rtlab compare`: its child process is ended, its
+    temporary directory removed, and rtlab exits 130 having written nothing."""
+    scene = small_demo(tmp_path, 3000, 2250)
+    tmp = tmp_path / "tmp"
+    tmp.mkdir()
+    env = dict(os.environ, TMPDIR=str(tmp))
+    child = Started(["compare", str(scene), "--against", "povray", "--out-dir", "cmp",
+                     "--threads", "1", "--quiet"], tmp_path, env)  # fmt: skip
+    deadline = time.monotonic() + 60
+    while not (povray := _children(child.proc.pid)):
+        assert time.monotonic() < deadline and child.proc.poll() is None, child.err
+        child.read(0.05)
+    assert "povray" in Path(f"/proc/{povray[0]}/cmdline").read_text()
+    child.proc.send_signal(signal.SIGINT)
+    code, err = child.finish()
+    assert code == 130, err
+    assert "rtlab: interrupted by SIGINT (Ctrl-C); no output written" in err
+    assert not Path(f"/proc/{povray[0]}").exists() or "zombie" in _state(povray[0])
+    assert list(tmp.iterdir()) == []
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["demo.toml", "tmp"]
+
+
+def _state(pid: int) -> str:
+    try:
+        return Path(f"/proc/{pid}/status").read_text()
+    except FileNotFoundError:
+        return "zombie"
 
 
 def test_check_and_demo_verbs(tmp_path, capsys):
