@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import argparse
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -13,7 +15,8 @@ import numpy as np
 import pytest
 
 import tracer
-from tracer.cli import demo_scene_path, main
+from tests.helpers import SCENES
+from tracer.cli import _duration, demo_scene_path, main
 from tracer.image import linear_to_srgb
 
 RTLAB = [sys.executable, "-m", "tracer.cli"]
@@ -128,6 +131,99 @@ def test_cli_overrides(tmp_path):
         ]
     )
     assert code == 0 and np.load(out).shape == (10, 20, 3)
+
+
+SUMMARY = re.compile(
+    r"(\d+)x(\d+), (\d+) spp, (\d+) threads: .* \((\d+) primary, (\d+) secondary, (\d+) shadow\)"
+)
+
+
+def render_cli(capsys, scene: Path, out: Path, *flags: str) -> tuple[np.ndarray, dict[str, int]]:
+    """`rtlab render` through main(); the image written and the summary's numbers."""
+    assert main(["render", str(scene), "-o", str(out), "--threads", "1", *flags]) == 0
+    m = SUMMARY.search(capsys.readouterr().out)
+    assert m, "no summary line"
+    keys = ("width", "height", "spp", "threads", "primary", "secondary", "shadow")
+    return np.load(out), dict(zip(keys, map(int, m.groups()), strict=True))
+
+
+@pytest.mark.parametrize(
+    ("text", "seconds"),
+    [("10s", 10.0), ("2m", 120.0), ("500ms", 0.5), ("1h", 3600.0), ("3", 3.0), ("1.5m", 90.0)],
+)
+def test_duration_units(text, seconds):
+    assert _duration(text) == seconds
+
+
+@pytest.mark.parametrize("text", ["0s", "-1s", "abc", "10x", "", "ms", "nan", "inf", "1e999s"])
+def test_duration_refuses(text):
+    with pytest.raises(argparse.ArgumentTypeError, match="expected a"):
+        _duration(text)
+
+
+def test_bad_time_is_refused_by_the_cli(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(["render", str(small_demo(tmp_path)), "-o", str(tmp_path / "x.npy"), "--time", "10x"])
+    assert exit_.value.code == 2
+    assert "expected a duration like 10s or 2m, got '10x'" in capsys.readouterr().err
+    assert not (tmp_path / "x.npy").exists()
+
+
+def test_time_renders_passes_and_averages_them(tmp_path, capsys):
+    """--time 0.3s: passes of 4 spp until the time is spent, pass k with the seed
+    (seed * 1000003 + k), averaged. The summary's spp counts every pass's samples; the image
+    must be the average of exactly that many passes, bit for bit. (A pass of this 16x12 image
+    takes about a millisecond: 0.3 s holds dozens, so at least two passes is certain.)"""
+    scene = small_demo(tmp_path, 16, 12)
+    image, summary = render_cli(capsys, scene, tmp_path / "t.npy", "--time", "0.3s",
+                                "--spp", "4", "--seed", "5")  # fmt: skip
+    passes, rest = divmod(summary["spp"], 4)
+    assert rest == 0 and passes >= 2, summary
+    assert summary["primary"] == passes * 4 * 16 * 12
+    model = tracer.load_scene(scene).with_overrides(spp=4)
+    total = np.zeros((12, 16, 3))
+    for k in range(passes):
+        one = model.with_overrides(seed=(5 * 1_000_003 + k) % 2**64)
+        total += tracer.render(one, threads=1).astype(np.float64)
+    assert np.array_equal(image, (total / passes).astype(np.float32))
+
+
+def test_seed_changes_a_jittered_image_and_reproduces_it(tmp_path, capsys):
+    scene = small_demo(tmp_path)
+    a, _ = render_cli(capsys, scene, tmp_path / "a.npy", "--spp", "4", "--seed", "1")
+    b, _ = render_cli(capsys, scene, tmp_path / "b.npy", "--spp", "4", "--seed", "2")
+    again, _ = render_cli(capsys, scene, tmp_path / "c.npy", "--spp", "4", "--seed", "1")
+    assert np.array_equal(a, again)
+    assert np.sum(np.any(a != b, axis=-1)) > 50  # edges and highlights move with the jitter
+    # One sample per pixel is its centre: nothing random, the seed changes nothing.
+    c, _ = render_cli(capsys, scene, tmp_path / "d.npy", "--spp", "1", "--seed", "1")
+    d, _ = render_cli(capsys, scene, tmp_path / "e.npy", "--spp", "1", "--seed", "2")
+    assert np.array_equal(c, d)
+
+
+def test_spp_sets_the_primary_rays(tmp_path, capsys):
+    scene = small_demo(tmp_path)
+    one, n1 = render_cli(capsys, scene, tmp_path / "a.npy", "--spp", "1")
+    nine, n9 = render_cli(capsys, scene, tmp_path / "b.npy", "--spp", "9")
+    assert (n1["spp"], n1["primary"]) == (1, 32 * 24)
+    assert (n9["spp"], n9["primary"]) == (9, 9 * 32 * 24)
+    assert np.sum(np.any(one != nine, axis=-1)) > 50  # antialiased edges
+
+
+def test_max_depth_1_removes_reflections(tmp_path, capsys):
+    """At --max-depth 1 the chain ends at the first hit: no reflected ray, and the image is
+    the one where no material reflects (the local colour C1 of each pixel)."""
+    mirrors = tmp_path / "mirrors.toml"
+    mirrors.write_text((SCENES / "mirrors.toml").read_text())
+    deep, nd = render_cli(capsys, mirrors, tmp_path / "a.npy", "--width", "40", "--height", "30")
+    flat, n1 = render_cli(capsys, mirrors, tmp_path / "b.npy", "--width", "40", "--height", "30",
+                          "--max-depth", "1")  # fmt: skip
+    assert nd["secondary"] > 0 and n1["secondary"] == 0
+    data = tracer.load_scene(mirrors).with_overrides(width=40, height=30).to_dict()
+    for m in data["materials"].values():
+        m["reflectivity"] = 0.0
+    assert np.array_equal(flat, tracer.render(tracer.load_scene(data), threads=1))
+    assert np.sum(np.any(np.abs(deep - flat) > 1e-3, axis=-1)) > 100
 
 
 def test_bad_scene_fails_cleanly_and_keeps_the_old_image(tmp_path, capsys):
