@@ -151,6 +151,12 @@ def agrees(
 def compare(reference: Image, test: Image, tolerance: float | Image = 1e-4) -> Comparison:
     mask = over_tolerance(reference, test, tolerance)
     tol = float(np.max(tolerance)) if not np.isscalar(tolerance) else float(tolerance)
+    # An image with NaN or inf has NaN metrics, and says so in pixels_over: no warnings too.
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return _compare(reference, test, mask, tol)
+
+
+def _compare(reference: Image, test: Image, mask: np.ndarray, tol: float) -> Comparison:
     return Comparison(
         rmse=rmse(reference, test),
         max_abs=max_abs(reference, test),
