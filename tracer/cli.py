@@ -272,15 +272,15 @@ class Interrupted(KeyboardInterrupt):
         self.signum = signum
 
 
+_interrupted = False  # set by the first signal
+
+
 def _on_signal(signum: int, frame: object) -> None:
     global _interrupted
     if _interrupted:  # a second signal while the first unwinds: let the clean-up finish
         return
     _interrupted = True
     raise Interrupted(signum)
-
-
-_interrupted = False
 
 
 def _signals_interrupt() -> dict[int, object]:
