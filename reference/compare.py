@@ -17,10 +17,18 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from reference.metrics import FLOAT32_SLACK, MITSUBA_TOLERANCE, compare, heat_map
+from reference.metrics import (
+    FLOAT32_SLACK,
+    MAX_SHARE_OVER,
+    MAX_SHARE_TESSELLATED,
+    MITSUBA_TOLERANCE,
+    agrees,
+    compare,
+    heat_map,
+)
 from tracer.image import atomic_path, save_image
 from tracer.render import render_with_stats
-from tracer.scene import Scene
+from tracer.scene import Scene, Torus
 
 REFERENCES = ("povray", "mitsuba")
 
@@ -35,9 +43,9 @@ class Run:
     notes: dict[str, Any] = field(default_factory=dict)
 
 
-def run_rtlab(scene: Scene, threads: int | None = None) -> Run:
+def run_rtlab(scene: Scene, threads: int | None = None, progress: bool | None = False) -> Run:
     start = time.perf_counter()
-    result = render_with_stats(scene, threads=threads, progress=False)
+    result = render_with_stats(scene, threads=threads, progress=progress)
     return Run("rtlab", result.image, result.seconds, time.perf_counter() - start,
                notes={"rays": result.rays, "threads": result.threads})  # fmt: skip
 
@@ -62,6 +70,25 @@ def run_reference(name: str, scene: Scene, threads: int | None = None) -> Run:
     raise ValueError(f"unknown reference renderer {name!r}; expected one of {REFERENCES}")
 
 
+def share_bound(scene: Scene, renderer: str) -> float:
+    """The share of pixels over tolerance the agreement rule allows (reference/metrics.py):
+    tori are tessellated for Mitsuba, so their silhouettes get the larger, argued bound."""
+    tori = any(isinstance(obj, Torus) for obj in scene.objects)
+    return MAX_SHARE_TESSELLATED if tori and renderer.startswith("mitsuba") else MAX_SHARE_OVER
+
+
+def verdict(scene: Scene, run: Run, ours: Run) -> tuple[bool | None, str]:
+    """Whether ``run`` agrees with rtlab's image by the rule of the reference tests
+    (metrics.agrees), and why. None, no verdict, where the images differ by their sampling
+    noise: a path-traced scene (compared statistically instead, reference/stats.py) and a
+    classic one at spp > 1 (each renderer jitters its own samples; POV-Ray here takes one)."""
+    if scene.render.integrator == "path":
+        return None, "no verdict: path-traced images are compared statistically (stats.py)"
+    if scene.render.spp > 1:
+        return None, "no verdict: antialiased images differ by their jittered samples"
+    return agrees(run.image, ours.image, run.tolerance, share_bound(scene, run.renderer))
+
+
 def compare_scene(
     scene: Scene,
     against: tuple[str, ...] = REFERENCES,
@@ -70,10 +97,16 @@ def compare_scene(
     json_path: str | os.PathLike[str] | None = None,
     threads: int | None = None,
     stem: str | None = None,
+    progress: bool | None = False,
+    written: list[Path] | None = None,
 ) -> list[dict[str, Any]]:
-    """Render with rtlab and each reference; one row per renderer (rtlab first)."""
+    """Render with rtlab and each reference; one row per renderer (rtlab first). A reference's
+    row says whether it ``agrees`` with rtlab (True, False, or None: no verdict) and why
+    (``verdict``). ``progress`` shows a bar for rtlab's render; every file written is appended
+    to ``written``, each complete (written atomically)."""
     stem = stem or Path(scene.source).stem or "scene"
-    ours = run_rtlab(scene, threads)
+    written = [] if written is None else written
+    ours = run_rtlab(scene, threads, progress)
     runs = [ours] + [run_reference(name, scene, threads) for name in against]
     rows: list[dict[str, Any]] = []
     out = Path(out_dir) if out_dir is not None else None
@@ -92,18 +125,21 @@ def compare_scene(
             row["tolerance"] = (
                 "per-pixel output precision" if run.renderer == "povray" else (MITSUBA_TOLERANCE)
             )
+            row["agrees"], row["verdict"] = verdict(scene, run, ours)
         if out is not None:
             for suffix in (".exr", ".png"):
-                save_image(out / f"{stem}-{run.renderer}{suffix}", run.image)
+                written.append(save_image(out / f"{stem}-{run.renderer}{suffix}", run.image))
             row["image"] = str(out / f"{stem}-{run.renderer}.exr")
             if run is not ours:
                 diff = out / f"{stem}-diff-{run.renderer}.png"
                 heat_map(run.image, ours.image, diff)
+                written.append(diff)
                 row["heat_map"] = str(diff)
         rows.append(row)
     if json_path is not None:
         with atomic_path(json_path) as tmp:
             tmp.write_text(json.dumps(_jsonable(rows), indent=2) + "\n")
+        written.append(Path(json_path))
     return rows
 
 
@@ -122,7 +158,7 @@ def _jsonable(value: Any) -> Any:
 def format_table(rows: list[dict[str, Any]]) -> str:
     """The comparison as a plain-text table, rtlab's time first, each reference against it."""
     head = (f"{'renderer':<14}{'RMSE':>10}{'max abs':>10}{'PSNR dB':>9}{'SSIM':>8}{'FLIP':>8}"
-            f"{'over tol':>10}{'trace s':>9}{'whole s':>9}")  # fmt: skip
+            f"{'over tol':>10}{'trace s':>9}{'whole s':>9}{'agrees':>8}")  # fmt: skip
     lines = [head, "-" * len(head)]
     for r in rows:
         if "rmse" in r:
@@ -131,7 +167,9 @@ def format_table(rows: list[dict[str, Any]]) -> str:
                        f"{r['ssim']:>8.5f}{r['flip']:>8.5f}{over:>9.3f}%")  # fmt: skip
         else:
             metrics = f"{'(reference of the comparison)':>55}"
+        agreed = {True: "yes", False: "NO", None: "-"}[r.get("agrees")]
         lines.append(
             f"{r['renderer']:<14}{metrics}{r['trace_seconds']:>9.3f}{r['whole_seconds']:>9.3f}"
+            f"{agreed:>8}"
         )
     return "\n".join(lines)

@@ -111,28 +111,52 @@ def flip(reference: Image, test: Image) -> tuple[float, np.ndarray]:
 
 def over_tolerance(reference: Image, test: Image, tolerance: float | Image) -> np.ndarray:
     """A (height, width) mask of pixels where any channel differs by more than ``tolerance``
-    (a number, or a per-pixel, per-channel array such as a reference's output precision)."""
+    (a number, or a per-pixel, per-channel array such as a reference's output precision), or
+    is not finite in either image: |nan - x| > tol is false, so NaN must be caught apart."""
     ref, tst = _check(reference, test)
-    return np.any(np.abs(ref - tst) > tolerance, axis=-1)
+    bad = ~(np.isfinite(ref) & np.isfinite(tst))
+    return np.any((np.abs(ref - tst) > tolerance) | bad, axis=-1)
+
+
+def non_finite(image: Image) -> int:
+    """The number of pixels with a NaN or infinite channel."""
+    return int(np.sum(~np.all(np.isfinite(np.asarray(image, dtype=np.float64)), axis=-1)))
 
 
 def agrees(
     reference: Image, test: Image, tolerance: float | Image, max_share: float = MAX_SHARE_OVER
 ) -> tuple[bool, str]:
-    """The regression rule: pixels over ``tolerance`` make up at most ``max_share``."""
+    """The regression rule: pixels over ``tolerance`` make up at most ``max_share``, and no
+    pixel of either image is NaN or infinite (a colour that is not a number is a bug, never a
+    silhouette to excuse, so one such pixel is a disagreement)."""
     mask = over_tolerance(reference, test, tolerance)
     share = float(mask.mean())
-    err = np.max(np.abs(np.asarray(reference, np.float64) - np.asarray(test, np.float64)))
+    bad_ref, bad_test = non_finite(reference), non_finite(test)
+    diff = np.abs(np.asarray(reference, np.float64) - np.asarray(test, np.float64))
+    diff = diff[np.isfinite(diff)]  # the largest error among the pixels that are numbers
+    err = float(diff.max()) if diff.size else 0.0
     text = (
         f"{int(mask.sum())} of {mask.size} pixels ({100 * share:.3f}%) over tolerance, "
         f"max abs error {err:.3g}"
     )
+    if bad_ref or bad_test:
+        text = (
+            f"not a number: {bad_ref} pixels of the reference and {bad_test} of the test image "
+            f"are NaN or infinite; {text} (of the finite pixels)"
+        )
+        return False, text
     return share <= max_share, text
 
 
 def compare(reference: Image, test: Image, tolerance: float | Image = 1e-4) -> Comparison:
     mask = over_tolerance(reference, test, tolerance)
     tol = float(np.max(tolerance)) if not np.isscalar(tolerance) else float(tolerance)
+    # An image with NaN or inf has NaN metrics, and says so in pixels_over: no warnings too.
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return _compare(reference, test, mask, tol)
+
+
+def _compare(reference: Image, test: Image, mask: np.ndarray, tol: float) -> Comparison:
     return Comparison(
         rmse=rmse(reference, test),
         max_abs=max_abs(reference, test),

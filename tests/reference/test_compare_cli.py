@@ -56,6 +56,41 @@ def test_mitsuba_xml_loads_in_a_fresh_process_and_renders_the_same(tmp_path, nam
     assert ok, text
 
 
+@pytest.mark.parametrize("name", ["cornell_box", "path_glossy_mirror"])
+def test_mitsuba_xml_of_a_path_scene_loads_in_a_fresh_process(tmp_path, name):
+    """A path-traced scene's XML (Mitsuba's path integrator; rtlab's own glossy and mixed
+    BSDF plugins in path_glossy_mirror) loads with mi.load_file in a fresh process that has
+    only imported converters.mitsuba, and renders what the dict conversion renders: the same
+    integrator, sampler and seed, so the same image up to float32 differences in how the XML
+    parser builds transforms from text (measured: 7e-7 at most), within MITSUBA_TOLERANCE."""
+    source = SCENES / f"{name}.toml"
+    xml = tmp_path / "s.xml"
+    args = ["convert", str(source), "--to", "mitsuba", "-o", str(xml), "--quiet",
+            "--width", "32", "--height", "32", "--spp", "16"]  # fmt: skip
+    assert main(args) == 0
+    text = xml.read_text()
+    assert '<integrator type="path">' in text
+    if name == "path_glossy_mirror":
+        assert 'type="rtlab_phong"' in text and 'type="rtlab_mixed_lobes"' in text
+    npy = tmp_path / "xml.npy"
+    code = (
+        "import numpy as np, mitsuba as mi\n"
+        "import converters.mitsuba  # registers rtlab's plugins in every variant\n"
+        "mi.set_variant('llvm_ad_rgb')\n"
+        f"img = mi.render(mi.load_file({str(xml)!r}))\n"
+        f"np.save({str(npy)!r}, np.array(img))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr[-2000:]
+    from reference.mitsuba import run_mitsuba
+
+    scene = tracer.load_scene(source).with_overrides(width=32, height=32, spp=16)
+    from_dict = run_mitsuba(scene, variant="llvm_ad_rgb", warm=False).image
+    assert from_dict.std() > 0.02  # a picture, not a black square
+    ok, text = agrees(from_dict, np.load(npy)[..., :3], MITSUBA_TOLERANCE)
+    assert ok, text
+
+
 def test_compare_writes_images_heat_maps_and_json(tmp_path, capsys):
     out = tmp_path / "cmp"
     js = tmp_path / "cmp" / "metrics.json"
@@ -71,9 +106,56 @@ def test_compare_writes_images_heat_maps_and_json(tmp_path, capsys):
                     "trace_seconds", "whole_seconds"):  # fmt: skip
             assert key in r, key
         assert r["rmse"] < 1e-4 and r["ssim"] > 0.999 and r["over_tolerance"] <= 0.0005
+        assert r["agrees"] is True, r["verdict"]
         assert Path(r["heat_map"]).exists()
     names = {p.name for p in out.iterdir()}
     assert {"shadows-rtlab.exr", "shadows-povray.png", "shadows-diff-mitsuba-llvm.png"} <= names
+
+
+def test_compare_exits_1_when_the_renderers_disagree(tmp_path, capsys, monkeypatch):
+    """A converter bug (the picture mirrored: ``right x`` for ``right -x``) injected into the
+    SDL that `rtlab compare` hands POV-Ray: the real POV-Ray renders it, the rule rejects it,
+    and the exit status says so."""
+    import converters.povray
+
+    def mirrored(scene, path):
+        sdl = converters.povray.to_povray(scene)
+        wrong = sdl.replace("right -x*", "right x*")
+        assert wrong != sdl, "the bug was not injected"
+        Path(path).write_text(wrong)
+        return Path(path)
+
+    monkeypatch.setattr("reference.povray.write_povray", mirrored)
+    js = tmp_path / "m.json"
+    args = ["compare", str(SHADOWS), "--against", "povray", "--json", str(js),
+            "--width", "80", "--height", "60", "--quiet"]  # fmt: skip
+    assert main(args) == 1
+    out, err = capsys.readouterr()
+    assert "rtlab: povray disagrees with rtlab:" in err and "pixels" in err
+    assert "exit status 1" in err
+    assert next(ln for ln in out.splitlines() if ln.startswith("povray")).endswith("NO")
+    row = json.loads(js.read_text())[1]
+    assert (
+        row["renderer"] == "povray"
+        and row["agrees"] is False
+        and "over tolerance" in row["verdict"]
+    )
+
+
+def test_compare_gives_no_verdict_on_jittered_samples(capsys):
+    """At spp > 1 each renderer jitters its own samples (and POV-Ray here takes one per pixel):
+    no pixel rule applies, and compare says so rather than fail."""
+    args = ["compare", str(SHADOWS), "--against", "povray", "--spp", "4", "--width", "40",
+            "--height", "30", "--quiet"]  # fmt: skip
+    assert main(args) == 0
+    assert capsys.readouterr().out.splitlines()[-1].endswith("-")
+
+
+def test_compare_help_states_the_exit_status(capsys):
+    with pytest.raises(SystemExit):
+        main(["compare", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "1 when one disagrees" in text and "130 or 143" in text
 
 
 def test_compare_rejects_an_unknown_renderer(capsys):
@@ -91,6 +173,35 @@ def test_bench_rows_have_the_contract_fields():
         r["machine"] = "test"
     text = format_ratios(rows)
     assert "ex25-64x32, 1 thread" in text and "rtlab is" in text
+
+
+def test_bench_json_through_the_cli(tmp_path, capsys, monkeypatch):
+    """`rtlab bench classic --json FILE` through main(), the suite made small (one repeat, one
+    thread, 64x32): the JSON file holds the rows with the contract's fields, and the ratios
+    are printed."""
+    from functools import partial
+
+    from reference.bench import SUITES
+
+    small = partial(suite_classic, repeats=1, threads=(1,), width=64, height=32)
+    monkeypatch.setitem(SUITES, "classic", small)
+    js = tmp_path / "out" / "bench.json"
+    assert main(["bench", "classic", "--json", str(js)]) == 0
+    printed = capsys.readouterr().out
+    assert "ex25-64x32, 1 thread (seconds):" in printed and f"rows in {js}" in printed
+    rows = json.loads(js.read_text())
+    assert sorted(r["renderer"] for r in rows) == ["mitsuba-llvm", "povray", "rtlab"]
+    for r in rows:
+        assert r["case"] == "ex25-64x32" and r["threads"] == 1, r
+        assert r["metric"] == "seconds" and r["unit"] == "s", r
+        assert isinstance(r["value"], float) and r["value"] > 0, r
+        assert r["suite"] == "classic" and r["machine"], r
+    assert [p.name for p in js.parent.iterdir()] == ["bench.json"]  # no temporary file left
+
+
+def test_bench_refuses_an_unknown_suite(capsys):
+    assert main(["bench", "fastest"]) == 2
+    assert "unknown suite 'fastest'; expected all or classic, geometry" in capsys.readouterr().err
 
 
 def test_geometry_bench_rows_have_the_contract_fields():

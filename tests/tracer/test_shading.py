@@ -12,6 +12,8 @@ roundings before it and could still catch any wrong term (the smallest term test
 
 from __future__ import annotations
 
+import math
+
 import pytest
 
 import tracer
@@ -95,3 +97,24 @@ def test_no_distance_falloff():
         materials={"m": material(diffuse=0.7)}, lights=[far], objects=[sphere([0, 0, 0], 1.0)]
     )
     assert got == pytest.approx(near, rel=REL)
+
+
+@pytest.mark.parametrize("packets", [True, False], ids=["packets", "one-ray"])
+def test_phong_uses_the_mirror_direction_off_axis(packets):
+    """Seen head on, R = N and R.L = N.L: the tests above cannot tell them apart. Here the eye
+    looks down at 45 degrees. The floor z = 0 (N = (0, 0, 1)), the eye at (0, -3, 3) looking at
+    the origin: the one primary ray d = (0, 1, -1)/sqrt(2) hits the origin, its mirror
+    direction is R = d - 2 (d.N) N = (0, 1, 1)/sqrt(2). The light at (0, 4, 3) is seen along
+    L = (0, 0.8, 0.6): N.L = 0.6, R.L = 1.4/sqrt(2) = 0.98995. With n = 10 the highlight is
+    0.5 * 0.98995^10 = 0.452 of the light; N in place of R would give 0.5 * 0.6^10 = 0.003."""
+    data = scene_dict(
+        camera={"eye": [0.0, -3.0, 3.0], "look_at": [0.0, 0.0, 0.0], "up": [0.0, 1.0, 0.0]},
+        materials={"m": material(color=[0.1, 0.9, 0.3], specular=0.5, shininess=10.0)},
+        lights=[{"type": "point", "position": [0.0, 4.0, 3.0], "color": [1.0, 0.5, 0.25]}],
+        objects=[{"type": "plane", "point": [0, 0, 0], "normal": [0, 0, 1], "material": "m"}],
+    )
+    result = tracer.render_with_stats(tracer.load_scene(data), threads=1, packets=packets)
+    r_dot_l = 1.4 / math.sqrt(2.0)
+    want = [0.5 * lc * r_dot_l**10 for lc in (1.0, 0.5, 0.25)]
+    assert [float(v) for v in result.image[0, 0]] == pytest.approx(want, rel=REL)
+    assert want[2] / 30 > 0.5 * 0.6**10  # the value N.L would give is far from it
