@@ -18,10 +18,10 @@ from typing import Any
 
 import numpy as np
 
-from tracer.cli import demo_scene_path
 from tracer.image import atomic_path
 from tracer.render import render_with_stats
 from tracer.scene import load_scene
+from tracer.scenes import demo_scene_path
 
 
 def machine() -> str:
