@@ -96,6 +96,14 @@ def read_object(
     axis = r.vec3(t, path, "axis", required=True, nonzero=True)
     major = r.number(t, path, "major_radius", required=True, above=0)
     minor = r.number(t, path, "minor_radius", required=True, above=0)
+    if minor > major:
+        # A spindle torus passes through itself: its quartic's roots then include the inner
+        # ("lemon") surface, which 18_torus.h's refinement would move onto the outer one.
+        raise r.fail(
+            f"{path}.minor_radius",
+            f"expected at most major_radius ({major:g}), got {minor:g}: a torus whose tube is "
+            "wider than its ring (a spindle torus) passes through itself",
+        )
     return Torus(center=center, axis=unit(axis), major_radius=major, minor_radius=minor,
                  material=material, transform=transform)  # fmt: skip
 

@@ -14,6 +14,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from tracer.scene.brightness import check_brightness
 from tracer.scene.errors import SceneError
 from tracer.scene.model import (
     ACCELERATIONS,
@@ -30,7 +31,7 @@ from tracer.scene.model import (
     Scene,
 )
 from tracer.scene.objects import read_object
-from tracer.scene.values import Reader, suggest
+from tracer.scene.values import Reader, join_key, suggest
 from tracer.scene.vectors import cross, norm, sub, unit
 
 
@@ -79,7 +80,7 @@ def parse_scene(
         read_object(r, item, f"objects[{i}]", materials, base)
         for i, item in enumerate(r.array(top, "objects"))
     )
-    return Scene(
+    scene = Scene(
         camera=camera,
         render=render,
         materials=materials,
@@ -88,6 +89,8 @@ def parse_scene(
         source=source,
         base_dir=base_dir if base_dir is not None else Path.cwd(),
     )
+    check_brightness(scene)
+    return scene
 
 
 # --------------------------------------------------------------------------- the parts
@@ -140,7 +143,7 @@ def _materials(r: Reader, data: Any) -> dict[str, Material]:
     out: dict[str, Material] = {}
     keys = {f.name for f in dataclasses.fields(Material)} - {"name"}
     for name, value in t.items():
-        path = f"materials.{name}"
+        path = join_key("materials", name)
         m = r.table(value, path, keys)
         d = Material(name=name)
         out[name] = Material(
@@ -176,4 +179,6 @@ def read_overrides(scene: Scene, camera: Mapping[str, Any], render: Mapping[str,
     """``scene`` with its camera and render settings read anew from plain values (the
     overrides of ``Scene.with_overrides``), validated like the file's."""
     r = Reader(f"{scene.source} (with overrides)")
-    return dataclasses.replace(scene, camera=_camera(r, camera), render=_render(r, render))
+    new = dataclasses.replace(scene, camera=_camera(r, camera), render=_render(r, render))
+    check_brightness(dataclasses.replace(new, source=r.source))
+    return new

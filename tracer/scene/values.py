@@ -4,16 +4,32 @@
 from __future__ import annotations
 
 import difflib
+import json
 import math
+import re
 from collections.abc import Mapping
 from typing import Any
 
 from tracer.scene.errors import SceneError
 from tracer.scene.vectors import Color, Vec3
 
+#: How alike a word must be to a known one to be suggested (difflib's ratio, 2 * matches / total
+#: length): 0.6, difflib's own default, takes "radus" for "radius" (0.91), not "colour" for
+#: "center" (0.33).
+SUGGEST_CUTOFF = 0.6
+#: A key TOML lets one write bare; any other is quoted when a message names it.
+_BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
+
+
+def join_key(path: str, key: str) -> str:
+    """The key path of ``key`` inside the table at ``path``, as TOML writes it: a key that is not
+    bare (empty, with spaces or dots) is quoted, so the message names it unambiguously."""
+    name = key if _BARE_KEY.fullmatch(key) else json.dumps(key, ensure_ascii=False)
+    return f"{path}.{name}" if path else name
+
 
 def suggest(word: str, choices: Any) -> str:
-    near = difflib.get_close_matches(word, list(choices), n=1, cutoff=0.6)
+    near = difflib.get_close_matches(word, list(choices), n=1, cutoff=SUGGEST_CUTOFF)
     return f" (did you mean {near[0]!r}?)" if near else ""
 
 
@@ -43,7 +59,7 @@ class Reader:
                 if key not in allowed:
                     where = f" for {what}" if what else ""
                     raise self.fail(
-                        f"{path}.{key}" if path else key,
+                        join_key(path, key),
                         f"unknown key{where}{suggest(key, allowed)}; expected one of "
                         + ", ".join(sorted(allowed)),
                     )
@@ -60,7 +76,7 @@ class Reader:
         if "type" not in t:
             raise self.fail(f"{path}.type", f"missing; expected one of {', '.join(kinds)}")
         kind = t["type"]
-        if kind not in kinds:
+        if not isinstance(kind, str) or kind not in kinds:  # a table or array is no name
             raise self.fail(
                 f"{path}.type",
                 f"expected one of {', '.join(kinds)}, got {describe(kind)}"
@@ -148,7 +164,9 @@ class Reader:
         value = self._get(t, path, key, required)
         if value is None:
             return default
-        full = f"{path}.{key}"
+        return self._vector(value, f"{path}.{key}", nonzero=nonzero)
+
+    def _vector(self, value: Any, full: str, *, nonzero: bool = False) -> Vec3:
         if not isinstance(value, list) or len(value) != 3:
             raise self.fail(full, f"expected an array of three numbers, got {describe(value)}")
         v = tuple(self._finite(x, f"{full}[{i}]") for i, x in enumerate(value))
@@ -179,10 +197,10 @@ class Reader:
     ) -> list[Vec3]:
         value = self._get(t, path, key, True)
         full = f"{path}.{key}"
-        if not isinstance(value, list) or (count is not None and len(value) != count):
+        if not isinstance(value, list) or not value or (count is not None and len(value) != count):
             n = f"{count}" if count is not None else "one or more"
             raise self.fail(full, f"expected an array of {n} points, got {describe(value)}")
-        return [self.vec3({"p": p}, full, "p", required=True) for p in value]
+        return [self._vector(p, f"{full}[{i}]") for i, p in enumerate(value)]
 
     def color(self, t: Mapping[str, Any], path: str, key: str, *, default: Color) -> Color:
         c = self.vec3(t, path, key, default=default)
