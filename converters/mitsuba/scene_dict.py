@@ -29,6 +29,7 @@ from tracer.scene import (
     Sphere,
     Torus,
     cylinder_height,
+    frame,
     scene_extent,
     to_world,
     triangles,
@@ -50,16 +51,7 @@ def plane_matrix(plane: Plane, radius: float, eye: tuple[float, float, float]) -
     the point of the plane nearest the eye."""
     n = np.array(plane.normal, dtype=np.float64)
     centre = np.array(eye) - np.dot(np.array(eye) - plane.point, n) * n
-    helper = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    s = np.cross(helper, n)
-    s /= np.linalg.norm(s)
-    t = np.cross(n, s)
-    m = np.eye(4)
-    m[:3, 0] = s * radius
-    m[:3, 1] = t * radius
-    m[:3, 2] = n
-    m[:3, 3] = centre
-    return m
+    return frame(centre, plane.normal) @ np.diag([radius, radius, 1.0, 1.0])
 
 
 def _sampler(scene: Scene) -> dict[str, Any]:

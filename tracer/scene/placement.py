@@ -22,6 +22,11 @@ from tracer.scene.model import (
 )
 from tracer.scene.vectors import Vec3, norm, sub, unit
 
+#: A frame's x axis comes from crossing the world x axis with its z axis, unless that z axis is
+#: within ~26 degrees of x (|z.x| >= 0.9, where the cross product would lose digits); then from
+#: the world y axis.
+HELPER_SWITCH = 0.9
+
 
 def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """Smooth-shading normals: at each vertex the sum of its faces' normals weighted by their
@@ -41,7 +46,7 @@ def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
 def frame(origin: Vec3, axis: Vec3) -> np.ndarray:
     """A 4x4 matrix taking the z axis to ``axis`` (unit) and the origin to ``origin``."""
     z = np.asarray(axis, dtype=np.float64)
-    helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < HELPER_SWITCH else np.array([0.0, 1.0, 0.0])
     x = np.cross(helper, z)
     x /= np.linalg.norm(x)
     y = np.cross(z, x)
@@ -111,5 +116,7 @@ def scene_extent(scene: Scene) -> float:
                     else obj.major_radius + obj.minor_radius
                 )
             )
+            # |M v| <= 3 max|m_ij| max|v_i| for a 3x3 M: how far the transform can carry the
+            # object's points from its origin.
             size = max(size, float(np.abs(m[:3, :3]).max()) * 3 * local)
     return size + max(float(np.max(np.abs(p))) for p in points)

@@ -34,6 +34,12 @@ from tracer.scene.objects import read_object
 from tracer.scene.values import Reader, join_key, suggest
 from tracer.scene.vectors import cross, norm, sub, unit
 
+#: Up and the viewing direction whose angle has a sine below this are parallel: the camera's
+#: right vector, their cross product, would be rounding noise.
+PARALLEL_UP = 1e-12
+#: The core's seed is an unsigned 64-bit integer (tracer/cpp/09_scene.h).
+MAX_SEED = 2**64 - 1
+
 
 def load_scene(source: str | os.PathLike[str] | Mapping[str, Any]) -> Scene:
     """Load a scene from a TOML file path, a TOML string, or a dict in the scene language.
@@ -109,7 +115,7 @@ def _camera(r: Reader, data: Any) -> Camera:
     if norm(forward) == 0.0:
         raise SceneError(r.source, "camera.look_at", "must differ from camera.eye")
     side = cross(forward, up)
-    if norm(side) <= 1e-12 * norm(forward) * norm(up):
+    if norm(side) <= PARALLEL_UP * norm(forward) * norm(up):
         raise SceneError(r.source, "camera.up", "must not be parallel to the viewing direction")
     return Camera(eye=eye, look_at=look_at, up=up, fov_y=fov_y, width=width, height=height)
 
@@ -131,7 +137,7 @@ def _render(r: Reader, data: Any) -> RenderSettings:
         max_depth=r.integer(t, "render", "max_depth", default=d.max_depth, low=1, high=MAX_DEPTH),
         min_coefficient=r.number(t, "render", "min_coefficient", default=d.min_coefficient, low=0),
         spp=r.integer(t, "render", "spp", default=d.spp, low=1, high=MAX_SPP),
-        seed=r.integer(t, "render", "seed", default=d.seed, low=0, high=2**64 - 1),
+        seed=r.integer(t, "render", "seed", default=d.seed, low=0, high=MAX_SEED),
         background=r.color(t, "render", "background", default=d.background),
         ambient_light=r.color(t, "render", "ambient_light", default=d.ambient_light),
         acceleration=r.choice(t, "render", "acceleration", ACCELERATIONS, default=d.acceleration),

@@ -17,6 +17,8 @@ from tracer.scene.vectors import Color, Vec3
 #: length): 0.6, difflib's own default, takes "radus" for "radius" (0.91), not "colour" for
 #: "center" (0.33).
 SUGGEST_CUTOFF = 0.6
+#: A value quoted in a message is cut to this many characters, so one line stays readable.
+DESCRIBE_WIDTH = 40
 #: A key TOML lets one write bare; any other is quoted when a message names it.
 _BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
 
@@ -37,7 +39,8 @@ def describe(value: Any) -> str:
     kind = {bool: "boolean", str: "string", int: "integer", float: "number", list: "array"}
     name = "table" if isinstance(value, Mapping) else kind.get(type(value), type(value).__name__)
     text = repr(value)
-    return f"{name} {text if len(text) <= 40 else text[:37] + '...'}"
+    short = text if len(text) <= DESCRIBE_WIDTH else text[: DESCRIBE_WIDTH - 3] + "..."
+    return f"{name} {short}"
 
 
 class Reader:
