@@ -325,3 +325,17 @@ def test_a_horn_torus_and_values_near_the_bound_load(tmp_scene):
     bright = GOOD.replace("position = [-3.0, 5.0, 4.0]", "position = [-3.0, 5.0, 4.0]\n"
                           "color = [1e15, 1.0, 1.0]", 1)  # fmt: skip
     assert tracer.load_scene(tmp_scene(bright)).lights[0].color[0] == 1e15
+
+
+def test_errors_that_are_not_about_a_scene_are_not_scene_errors():
+    """A variant this Mitsuba cannot run and a benchmark suite that does not exist are faults
+    of the set-up or the command, with their own types."""
+    import converters.mitsuba as cm
+    from reference.bench import UnknownSuiteError, run_suites
+
+    with pytest.raises(cm.MitsubaVariantError, match="'no_such_variant' is not in this build"):
+        cm.use_variant("no_such_variant")
+    with pytest.raises(UnknownSuiteError, match="unknown suite 'nope'") as info:
+        run_suites(["nope"], None)
+    assert not isinstance(info.value, SceneError)
+    assert not issubclass(cm.MitsubaVariantError, SceneError)
