@@ -196,7 +196,7 @@ BAD_INPUT = {
     ),
     "mesh index out of range": (
         one_object(f'type = "mesh"\n{TRIANGLE}\nfaces = [[0, 1, 3]]'),
-        "objects[0].faces[0]", "vertex index 3 out of range 0..2",
+        "objects[0].faces[0]", "expected vertex indices 0..2 (the mesh has 3 vertices), got 3",
     ),
     "mesh face of two vertices": (
         one_object(f'type = "mesh"\n{TRIANGLE}\nfaces = [[0, 1]]'),

@@ -21,6 +21,7 @@ import datetime
 import json
 import math
 import os
+import re
 import tomllib
 from pathlib import Path
 from typing import Any
@@ -206,6 +207,18 @@ def break_bytes(raw: bytes, draw: Any) -> tuple[bytes, str]:
 FILE_LEVEL = ("cannot read the scene file", "invalid TOML")
 
 
+#: Every message says what was wrong in one of these words.
+SAYS_WHAT_WAS_EXPECTED = ("expected", "missing", "unknown", "must", "cannot", "could make")
+
+
+def _first_segment(key: str) -> str:
+    """The top-level key a key path starts with (``objects[2].radius`` -> ``objects``; a quoted
+    key, ``"dark red".color``, unquoted)."""
+    if key.startswith('"'):
+        return json.JSONDecoder().raw_decode(key)[0]
+    return re.split(r"[.\[]", key, maxsplit=1)[0]
+
+
 class Tally:
     def __init__(self) -> None:
         self.tried = self.loaded = self.refused = self.rendered = 0
@@ -256,7 +269,10 @@ def test_edited_scenes_load_or_raise_a_scene_error(scene_path: Path, tallies, fu
             context = f"{done} {broke}: {message}"
             assert message.startswith(f"{path}: "), context
             if err.key:
-                assert f": {err.key}: " in message, context
+                assert message.startswith(f"{path}: {err.key}: "), context
+                # the key is a place in this document (or the [camera] it lacks)
+                assert _first_segment(err.key) in {*doc, "camera"}, context
+                assert any(w in message for w in SAYS_WHAT_WAS_EXPECTED), context
             else:
                 assert message.startswith(tuple(f"{path}: {w}" for w in FILE_LEVEL)), context
                 # where in the file: TOML's "at line 3, column 7" or "at end of document", or

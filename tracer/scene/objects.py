@@ -206,6 +206,10 @@ def _triangulate(r: Reader, value: Any, key: str, n_vertices: int) -> np.ndarray
             )
         bad = [v for v in face if not 0 <= v < n_vertices]
         if bad:
-            raise r.fail(f"{key}[{i}]", f"vertex index {bad[0]} out of range 0..{n_vertices - 1}")
+            raise r.fail(
+                f"{key}[{i}]",
+                f"expected vertex indices 0..{n_vertices - 1} (the mesh has {n_vertices} "
+                f"vertices), got {bad[0]}",
+            )
         out += [[face[0], face[k], face[k + 1]] for k in range(1, len(face) - 1)]
     return np.array(out, dtype=np.int32)
