@@ -6,13 +6,18 @@ expected; an unknown key suggests the near spelling.
 
 One job per module, all re-exported here (``from tracer.scene import X`` is the contract):
 
-- ``model``: the dataclasses a scene is made of, and the language's limits;
-- ``reading`` and ``objects``: TOML and dicts in, validated through ``values.Reader``;
+- ``model``: the dataclasses a scene is made of, and the language's limits; ``document``: the
+  whole ``Scene``;
+- ``reading``, ``settings`` and ``objects``: TOML and dicts in, validated through
+  ``values.Reader``; ``brightness``: scenes whose image could overflow float32 refused;
 - ``unparse``: a scene back to the scene language (``Scene.to_dict``);
 - ``placement``: world-space frames, matrices and triangles, shared by core and converters;
 - ``errors``: ``SceneError``; ``vectors``: small tuple helpers.
+
+Imports run one way, from ``document`` and ``reading`` down to ``vectors``.
 """
 
+from tracer.scene.document import Scene
 from tracer.scene.errors import SceneError
 from tracer.scene.model import (
     ACCELERATIONS,
@@ -32,7 +37,6 @@ from tracer.scene.model import (
     PointLight,
     Quad,
     RenderSettings,
-    Scene,
     Sphere,
     Torus,
     Transform,

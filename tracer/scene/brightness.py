@@ -24,12 +24,15 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from tracer.scene.errors import SceneError
-from tracer.scene.model import Scene
 from tracer.scene.values import join_key
+
+if TYPE_CHECKING:  # the whole scene is built on this check, not the other way round
+    from tracer.scene.document import Scene
 
 #: float32's largest finite value: every image is float32.
 FLOAT32_MAX = float(np.finfo(np.float32).max)

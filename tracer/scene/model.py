@@ -1,14 +1,13 @@
-"""The scene model: what a scene says, as frozen dataclasses, once it has been validated.
+"""The scene model's parts: camera, render settings, materials, lights and objects, as frozen
+dataclasses, once they have been validated; and the language's limits.
 
 Nothing here reads TOML (tracer.scene.reading does) or places objects in world space
-(tracer.scene.placement does); a ``Scene`` is what every renderer and converter reads.
+(tracer.scene.placement does); the whole ``Scene`` is in tracer.scene.document.
 """
 
 from __future__ import annotations
 
-import dataclasses
-from dataclasses import dataclass, field
-from pathlib import Path
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -187,42 +186,3 @@ class Torus:
 
 Light = PointLight | DirectionalLight
 Object = Sphere | Plane | Box | Triangle | Quad | Mesh | Cylinder | Torus
-
-
-@dataclass(frozen=True)
-class Scene:
-    camera: Camera
-    render: RenderSettings = field(default_factory=RenderSettings)
-    materials: dict[str, Material] = field(default_factory=dict)
-    lights: tuple[Light, ...] = ()
-    objects: tuple[Object, ...] = ()
-    source: str = "<scene>"
-    #: The directory relative file names in the scene are resolved against.
-    base_dir: Path = field(default_factory=Path.cwd)
-
-    def with_overrides(self, **overrides: Any) -> Scene:
-        """A copy with camera/render keys replaced (``width=1920, spp=4``); None leaves a key.
-
-        The new values are validated like the file's; the objects are kept as they are."""
-        cam = dataclasses.asdict(self.camera)
-        ren = dataclasses.asdict(self.render)
-        for key, value in overrides.items():
-            if value is None:
-                continue
-            if key in cam:
-                cam[key] = value
-            elif key in ren:
-                ren[key] = value
-            else:
-                raise TypeError(f"unknown override {key!r}")
-        from tracer.scene.reading import read_overrides  # reading builds on this model
-
-        plain = {k: list(v) if isinstance(v, tuple) else v for k, v in cam.items()}
-        plain_render = {k: list(v) if isinstance(v, tuple) else v for k, v in ren.items()}
-        return read_overrides(self, plain, plain_render)
-
-    def to_dict(self) -> dict[str, Any]:
-        """The scene as a plain dict in the scene language; ``parse_scene`` reads it back."""
-        from tracer.scene.unparse import unparse  # unparsing builds on this model
-
-        return unparse(self)

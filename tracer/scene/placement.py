@@ -4,7 +4,7 @@ objects, smooth vertex normals, and the scene's extent."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -15,12 +15,14 @@ from tracer.scene.model import (
     Plane,
     PointLight,
     Quad,
-    Scene,
     Sphere,
     Torus,
     Triangle,
 )
 from tracer.scene.vectors import Vec3, norm, sub, unit
+
+if TYPE_CHECKING:  # scene_extent reads a whole scene; the scene's reading builds on placement
+    from tracer.scene.document import Scene
 
 #: A frame's x axis comes from crossing the world x axis with its z axis, unless that z axis is
 #: within ~26 degrees of x (|z.x| >= 0.9, where the cross product would lose digits); then from

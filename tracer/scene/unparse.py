@@ -4,10 +4,13 @@
 from __future__ import annotations
 
 import dataclasses
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from tracer.scene.model import Mesh, Scene, Transform
+from tracer.scene.model import Mesh, Transform
 from tracer.scene.objects import resolve_file
+
+if TYPE_CHECKING:  # Scene.to_dict calls this: the whole scene is built on it
+    from tracer.scene.document import Scene
 
 
 def unparse(scene: Scene) -> dict[str, Any]:
