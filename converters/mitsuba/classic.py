@@ -149,7 +149,9 @@ def plugin_class() -> type:
                 t, N, Ng = refine_hit(g, o, d, mi.Float64(si.t), mi.Vector3d(si.sh_frame.n),
                                       mi.Vector3d(si.n))  # fmt: skip
                 p = o + t * d
-                N, Ng = face_the_ray(Ng, N, d)
+                # Ng only turns N to the side we see: new rays start along their own direction
+                # (converters.mitsuba.rays says why), not off the surface along Ng.
+                N, _ = face_the_ray(Ng, N, d)
                 R = d - 2 * dr.dot(d, N) * N
                 c = mi.Color3d(g["r"], g["g"], g["b"])
                 local = c * g["ambient"] * ambient_light
