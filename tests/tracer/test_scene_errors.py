@@ -269,13 +269,32 @@ BAD_INPUT = {
         GOOD.replace("[camera]", '"" = 1\n\n[camera]', 1), '""', "unknown key",
     ),
     "material that overflows float32": (
+        GOOD.replace("color = [0.8, 0.1, 0.1]", "color = [1e18, 0.1, 0.1]\ndiffuse = 100.0", 1),
+        "materials.red.color", "a value of 1e+18 could make the image overflow float32",
+    ),
+    "a number past 1e18": (
         GOOD.replace("color = [0.8, 0.1, 0.1]", "color = [1e299, 0.1, 0.1]", 1),
-        "materials.red.color", "could make the image overflow float32",
+        "materials.red.color[0]", "magnitude at most 1e+18, got 1e+299",
+    ),
+    "an integer past a double": (
+        GOOD.replace("radius = 1.0", f"radius = {10**400}", 1),
+        "objects[0].radius", "expected a finite number",
+    ),
+    "a mesh vertex near the largest double": (
+        one_object('type = "mesh"\nvertices = [[0.0, 0.0, 0.0], [1.7976931348623157e308, 0.0, 0.0],'
+                   " [0.0, 1.0, 0.0]]\nfaces = [[0, 1, 2]]"),
+        "objects[0].vertices[1][0]", "magnitude at most 1e+18",
+    ),
+    "a transform that carries an object too far": (
+        one_object(BOX + "\ntransform = { scale = [1e17, 1.0, 1.0], "
+                   "translate = [1e18, 0.0, 0.0] }"),
+        "objects[0].transform", "within 1e+18 of the origin, got one reaching 1.3e+18",
     ),
     "light that overflows float32": (
         GOOD.replace("position = [-3.0, 5.0, 4.0]",
-                     "position = [-3.0, 5.0, 4.0]\ncolor = [1e25, 1.0, 1.0]", 1),
-        "lights[0].color", "could make the image overflow float32",
+                     "position = [-3.0, 5.0, 4.0]\ncolor = [1e18, 1.0, 1.0]", 1)
+        .replace("color = [0.8, 0.1, 0.1]", "diffuse = 100.0", 1),
+        "lights[0].color", "a value of 1e+18 could make the image overflow float32",
     ),
     "reflection chain that overflows float32": (
         "[render]\nmax_depth = 10000\n"
@@ -283,8 +302,9 @@ BAD_INPUT = {
         "materials.red.reflectivity", "returning 1.5 times what it receives, over render.max_depth",
     ),
     "path emission that overflows float32": (
-        PATH + GOOD.replace("color = [0.8, 0.1, 0.1]", "emission = [1e30, 1e30, 1e30]", 1),
-        "materials.red.emission", "a value of 1e+30 could make the image overflow float32",
+        PATH + GOOD.replace("color = [0.8, 0.1, 0.1]",
+                            "emission = [1e18, 1e18, 1e18]\ndiffuse = 100.0", 1),
+        "materials.red.emission", "a value of 1e+18 could make the image overflow float32",
     ),
 }  # fmt: skip
 
@@ -303,6 +323,26 @@ def test_a_mesh_file_with_a_nan_vertex_is_refused(tmp_scene):
         tracer.load_scene(path)
     assert info.value.key == "objects[0].file" and "non-finite vertices" in str(info.value)
     assert str(info.value).startswith(f"{path}: objects[0].file: ")
+
+
+def test_a_mesh_file_that_reaches_too_far_is_refused(tmp_scene):
+    """A mesh file's vertices pass no number check of the reader: its reach is checked."""
+    path = tmp_scene(one_object('type = "mesh"\nfile = "m.obj"'))
+    (path.parent / "m.obj").write_text("v 0 0 0\nv 1e300 0 0\nv 0 1 0\nf 1 2 3\n")
+    with pytest.raises(SceneError) as info:
+        tracer.load_scene(path)
+    assert str(info.value).startswith(f"{path}: objects[0]: expected an object within 1e+18")
+
+
+def test_tiny_directions_are_made_unit_length(tmp_scene):
+    """A normal or light direction so short that its squared length underflows (1e-300) is
+    still a direction: it becomes a unit vector, not a division by zero."""
+    text = GOOD.replace("normal = [0.0, 1.0, 0.0]", "normal = [0.0, 1e-300, 0.0]", 1).replace(
+        'type = "point"\nposition = [-3.0, 5.0, 4.0]',
+        'type = "directional"\ndirection = [-1e-300, -1e-300, 0.0]', 1)  # fmt: skip
+    scene = tracer.load_scene(tmp_scene(text))
+    assert scene.objects[1].normal == (0.0, 1.0, 0.0)
+    assert scene.lights[0].direction == pytest.approx((-(0.5**0.5), -(0.5**0.5), 0.0), rel=1e-15)
 
 
 def test_a_file_that_is_not_utf8_says_where(tmp_scene):

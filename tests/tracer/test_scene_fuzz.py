@@ -41,10 +41,10 @@ SCENES = sorted((ROOT / "reference" / "scenes").glob("*.toml")) + sorted(
 EXAMPLES = int(os.environ.get("RTLAB_FUZZ_EXAMPLES", "100"))
 
 #: Numbers at the edges: not numbers, infinite, negative, zero, denormal-small, near float32's
-#: and float64's largest, and integers past 64 bits.
+#: and float64's largest, and integers past 64 bits and past a double's range.
 SPECIAL_NUMBERS = [math.nan, math.inf, -math.inf, -1, -1.0, -1e-300, 0, 0.0, -0.0, 1e-300,
                    5e-324, 1e-45, 3.5e38, -3.5e38, 1e299, -1e299, 1.7976931348623157e308,
-                   2**63, 2**64, -(2**63) - 1, 10**30, 1, 2, 0.5]  # fmt: skip
+                   2**63, 2**64, -(2**63) - 1, 10**30, 10**400, 1, 2, 0.5]  # fmt: skip
 
 #: Any value TOML can hold: what a retyped key may become.
 SCALARS = st.one_of(

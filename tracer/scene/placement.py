@@ -12,6 +12,7 @@ from tracer.scene.model import (
     Box,
     Cylinder,
     Mesh,
+    Object,
     Plane,
     PointLight,
     Quad,
@@ -98,27 +99,37 @@ def scene_extent(scene: Scene) -> float:
     points += [light.position for light in scene.lights if isinstance(light, PointLight)]
     size = 1.0
     for obj in scene.objects:
-        if isinstance(obj, Sphere):
-            points.append(obj.center)
-            size = max(size, obj.radius)
-        elif isinstance(obj, Plane):
-            points.append(obj.point)
-        elif isinstance(obj, Triangle | Quad | Mesh):
-            v = triangles(obj)[0]
-            points += [v.min(axis=0), v.max(axis=0)]
-        else:
-            m = to_world(obj)
-            points.append(m[:3, 3])
-            local = (
-                max(np.abs(obj.min).max(), np.abs(obj.max).max())
-                if isinstance(obj, Box)
-                else (
-                    cylinder_height(obj) + obj.radius
-                    if isinstance(obj, Cylinder)
-                    else obj.major_radius + obj.minor_radius
-                )
-            )
-            # |M v| <= 3 max|m_ij| max|v_i| for a 3x3 M: how far the transform can carry the
-            # object's points from its origin.
-            size = max(size, float(np.abs(m[:3, :3]).max()) * 3 * local)
+        where, extent = _points_and_size(obj)
+        points += where
+        size = max(size, extent)
     return size + max(float(np.max(np.abs(p))) for p in points)
+
+
+def reach(obj: Object) -> float:
+    """How far from the origin the object can reach: its largest coordinate plus its size."""
+    where, extent = _points_and_size(obj)
+    return extent + max(float(np.max(np.abs(p))) for p in where)
+
+
+def _points_and_size(obj: Object) -> tuple[list[Any], float]:
+    """Points the object lies around (world space) and a size it stays within about them."""
+    if isinstance(obj, Sphere):
+        return [obj.center], obj.radius
+    if isinstance(obj, Plane):
+        return [obj.point], 0.0
+    if isinstance(obj, Triangle | Quad | Mesh):
+        v = triangles(obj)[0]
+        return [v.min(axis=0), v.max(axis=0)], 0.0
+    m = to_world(obj)
+    local = (
+        max(np.abs(obj.min).max(), np.abs(obj.max).max())
+        if isinstance(obj, Box)
+        else (
+            cylinder_height(obj) + obj.radius
+            if isinstance(obj, Cylinder)
+            else obj.major_radius + obj.minor_radius
+        )
+    )
+    # |M v| <= 3 max|m_ij| max|v_i| for a 3x3 M: how far the transform can carry the object's
+    # points from its origin.
+    return [m[:3, 3]], float(np.abs(m[:3, :3]).max()) * 3 * local

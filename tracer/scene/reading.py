@@ -17,10 +17,11 @@ from typing import Any
 from tracer.scene.brightness import check_brightness
 from tracer.scene.document import Scene
 from tracer.scene.errors import SceneError
-from tracer.scene.model import DirectionalLight, Light, Material, PointLight
+from tracer.scene.model import DirectionalLight, Light, Material, Object, PointLight
 from tracer.scene.objects import read_object
+from tracer.scene.placement import reach
 from tracer.scene.settings import read_camera, read_render
-from tracer.scene.values import Reader, join_key
+from tracer.scene.values import MAX_MAGNITUDE, Reader, join_key
 from tracer.scene.vectors import unit
 
 
@@ -66,7 +67,7 @@ def parse_scene(
     lights = tuple(_light(r, item, f"lights[{i}]") for i, item in enumerate(r.array(top, "lights")))
     base = base_dir if base_dir is not None else Path.cwd()
     objects = tuple(
-        read_object(r, item, f"objects[{i}]", materials, base)
+        _within_reach(r, read_object(r, item, f"objects[{i}]", materials, base), f"objects[{i}]")
         for i, item in enumerate(r.array(top, "objects"))
     )
     scene = Scene(
@@ -83,6 +84,20 @@ def parse_scene(
 
 
 # --------------------------------------------------------------------------- the parts
+
+
+def _within_reach(r: Reader, obj: Object, path: str) -> Object:
+    """The object, once its world-space reach (after its transform, or a mesh file's vertices,
+    which no number check has seen) is within MAX_MAGNITUDE like every number of the scene."""
+    far = reach(obj)
+    if not far <= MAX_MAGNITUDE:
+        where = f"{path}.transform" if getattr(obj, "transform", None) is not None else path
+        raise r.fail(
+            where,
+            f"expected an object within {MAX_MAGNITUDE:g} of the origin, got one reaching "
+            f"{far:g} (the renderers square coordinates; no scene needs more)",
+        )
+    return obj
 
 
 def _materials(r: Reader, data: Any) -> dict[str, Material]:

@@ -17,6 +17,11 @@ from tracer.scene.vectors import Color, Vec3
 #: length): 0.6, difflib's own default, takes "radus" for "radius" (0.91), not "colour" for
 #: "center" (0.33).
 SUGGEST_CUTOFF = 0.6
+#: No number of a scene is larger in magnitude: coordinates squared and summed (every distance
+#: test) stay finite in the references' float32 (3 (2e18)^2 ~ 1.2e37 < 3.4e38), and their fourth
+#: powers (the torus quartic, 18_torus.h) in double; a colour or coefficient this large is
+#: refused anyway by tracer.scene.brightness.
+MAX_MAGNITUDE = 1e18
 #: A value quoted in a message is cut to this many characters, so one line stays readable.
 DESCRIBE_WIDTH = 40
 #: A key TOML lets one write bare; any other is quoted when a message names it.
@@ -111,9 +116,19 @@ class Reader:
     def _finite(self, value: Any, key: str, what: str = "a number") -> float:
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise self.fail(key, f"expected {what}, got {describe(value)}")
-        if not math.isfinite(value):
+        try:
+            x = float(value)
+        except OverflowError:  # an integer past a double's range
+            x = math.inf if value > 0 else -math.inf
+        if not math.isfinite(x):
             raise self.fail(key, f"expected a finite number, got {value}")
-        return float(value)
+        if abs(x) > MAX_MAGNITUDE:
+            raise self.fail(
+                key,
+                f"expected a number of magnitude at most {MAX_MAGNITUDE:g}, got {x:g} (the "
+                "renderers square and cube coordinates; no scene needs more)",
+            )
+        return x
 
     def number(
         self,

@@ -24,6 +24,10 @@ def norm(a: Vec3) -> float:
 
 def unit(a: Vec3) -> Vec3:
     n = norm(a)
+    if not 0 < n < math.inf:  # its square under- or overflowed: scale it to ~1 first
+        big = max(abs(a[0]), abs(a[1]), abs(a[2]))
+        a = (a[0] / big, a[1] / big, a[2] / big)
+        n = norm(a)
     return (a[0] / n, a[1] / n, a[2] / n)
 
 
