@@ -272,6 +272,10 @@ BAD_INPUT = {
         GOOD.replace("color = [0.8, 0.1, 0.1]", "color = [1e18, 0.1, 0.1]\ndiffuse = 100.0", 1),
         "materials.red.color", "a value of 1e+18 could make the image overflow float32",
     ),
+    "a highlight exponent past the core's x^n": (
+        GOOD.replace("color = [0.8, 0.1, 0.1]", "specular = 0.5\nshininess = 1.2e16", 1),
+        "materials.red.shininess", "expected a number <= 1e+12, got 1.2e+16",
+    ),
     "a number past 1e18": (
         GOOD.replace("color = [0.8, 0.1, 0.1]", "color = [1e299, 0.1, 0.1]", 1),
         "materials.red.color[0]", "magnitude at most 1e+18, got 1e+299",

@@ -5,13 +5,15 @@ one to three random edits to its tables (keys dropped, renamed, added; values re
 made NaN, inf, negative, huge, tiny or zero; arrays shortened or lengthened; tables nested
 wrongly), writes it back as TOML, sometimes breaks the bytes (not UTF-8, cut short), and loads
 the file. The property: it loads, or it raises a ``SceneError`` whose message starts with the
-file's name and names the key (or, for a file that is not UTF-8 or not TOML, says where in the
-file). Never any other exception.
+file's name and a key path that starts at a key of the document, and says what was expected (or,
+for a file that is not UTF-8 or not TOML, says where in the file). Never any other exception.
+A scene that loads renders a tiny image with no NaN and no inf.
 
-The suite tries ``RTLAB_FUZZ_EXAMPLES`` examples per scene (100 by default: a few seconds per
-scene); a long session sets it higher, e.g. ``RTLAB_FUZZ_EXAMPLES=20000 pytest -s
-tests/tracer/test_scene_fuzz.py``. Each test prints how many cases it tried and how many
-loaded, and appends them as a JSON line to ``RTLAB_FUZZ_LOG`` when that is set.
+The suite tries ``RTLAB_FUZZ_EXAMPLES`` examples per scene (100 by default: about half a second
+per scene); a long session sets it higher: ``RTLAB_FUZZ_EXAMPLES=20000 pytest -s
+tests/tracer/test_scene_fuzz.py`` tries about 400,000 cases in about 30 minutes on one core. It
+prints how many cases each scene tried, loaded, rendered and refused, and appends them as JSON
+lines to the file ``RTLAB_FUZZ_LOG`` names, when set (under pytest-xdist only the log shows).
 """
 
 from __future__ import annotations

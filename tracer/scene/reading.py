@@ -85,6 +85,14 @@ def parse_scene(
 
 # --------------------------------------------------------------------------- the parts
 
+#: The core computes the highlight max(R.L, 0)^n as exp(n ln x) (tracer/cpp/power.h), rounding
+#: n ln x / ln 2 with a 1.5 * 2^52 shifter, which holds while that is below 2^51; ln x >=
+#: ln 2^-1074 ~ -744.4, so n up to 1e12 keeps it below 1.1e15 for every x (shininess 1.17e16
+#: gave the packet tracer 3 inf pixels). A highlight of exponent 1e12 is already a point: it
+#: falls to half within ~1.2e-6 radians.
+MAX_SHININESS = 1e12
+_SHININESS_WHY = " (the core's highlight x^n holds only for exponents up to ~2e12)"
+
 
 def _within_reach(r: Reader, obj: Object, path: str) -> Object:
     """The object, once its world-space reach (after its transform, or a mesh file's vertices,
@@ -114,7 +122,15 @@ def _materials(r: Reader, data: Any) -> dict[str, Material]:
             ambient=r.number(m, path, "ambient", default=d.ambient, low=0),
             diffuse=r.number(m, path, "diffuse", default=d.diffuse, low=0),
             specular=r.number(m, path, "specular", default=d.specular, low=0),
-            shininess=r.number(m, path, "shininess", default=d.shininess, above=0),
+            shininess=r.number(
+                m,
+                path,
+                "shininess",
+                default=d.shininess,
+                above=0,
+                high=MAX_SHININESS,
+                why=_SHININESS_WHY,
+            ),
             reflectivity=r.number(m, path, "reflectivity", default=d.reflectivity, low=0),
             emission=r.color(m, path, "emission", default=d.emission),
         )

@@ -141,6 +141,8 @@ class Reader:
         low: float | None = None,
         above: float | None = None,
         below: float | None = None,
+        high: float | None = None,
+        why: str = "",
     ) -> float:
         value = self._get(t, path, key, required)
         if value is None:
@@ -154,6 +156,8 @@ class Reader:
             raise self.fail(full, f"expected {words}, got {x:g}")
         if below is not None and x >= below:
             raise self.fail(full, f"expected a number < {below:g}, got {x:g}")
+        if high is not None and x > high:
+            raise self.fail(full, f"expected a number <= {high:g}, got {x:g}{why}")
         return x
 
     def integer(
