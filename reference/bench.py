@@ -18,10 +18,10 @@ from typing import Any
 
 import numpy as np
 
-from tracer.cli import demo_scene_path
 from tracer.image import atomic_path
 from tracer.render import render_with_stats
 from tracer.scene import load_scene
+from tracer.scenes import demo_scene_path
 
 
 def machine() -> str:
@@ -187,7 +187,14 @@ SUITES: dict[str, Callable[..., list[dict[str, Any]]]] = {
 }
 
 
+class UnknownSuiteError(ValueError):
+    """A benchmark suite that does not exist: a usage error, not a fault of any scene."""
+
+
 def run_suites(names: list[str], json_path: str | os.PathLike[str] | None) -> list[dict]:
+    unknown = [n for n in names if n not in SUITES]
+    if unknown:
+        raise UnknownSuiteError(f"unknown suite {unknown[0]!r}; expected {', '.join(SUITES)}")
     rows: list[dict[str, Any]] = []
     where = machine()
     for name in names:

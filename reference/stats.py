@@ -54,7 +54,7 @@ def scene_hash(scene: Scene, spp: int, renderer: str) -> str:
     (a change to how scenes are converted must not reuse references made the old way)."""
     import converters.mitsuba
 
-    converter = hashlib.sha256(Path(converters.mitsuba.__file__).read_bytes()).hexdigest()
+    converter = converters.mitsuba.source_digest()  # every module of the package
     data = json.dumps(scene.to_dict(), sort_keys=True, default=str) + converter
     # The cache format is part of the key: a change to how references are made changes it.
     return hashlib.sha256(f"{data}|{spp}|{renderer}|chunks{CHUNKS}".encode()).hexdigest()[:24]

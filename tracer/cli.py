@@ -5,18 +5,15 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
-from importlib import resources
 from pathlib import Path
 
 from tracer.image import ImageFormatError, image_format, save_aov, save_image
 from tracer.render import aov_channels, render_progressive, render_with_stats
 from tracer.scene import Scene, SceneError, load_scene
 
-DEMO_SCENE = "ex25.toml"
-
-
-def demo_scene_path() -> Path:
-    return Path(str(resources.files("tracer") / "scenes" / DEMO_SCENE))
+# The demo scene lives with the scenes; re-exported here, where tests and users call it.
+from tracer.scenes import DEMO_SCENE as DEMO_SCENE
+from tracer.scenes import demo_scene_path as demo_scene_path
 
 
 def _positive_int(text: str) -> int:

@@ -1,0 +1,68 @@
+"""Reading the [camera] and [render] tables: from a scene file, and again from the overrides of
+``Scene.with_overrides``, so both are validated alike."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+from tracer.scene.errors import SceneError
+from tracer.scene.model import (
+    ACCELERATIONS,
+    INTEGRATORS,
+    MAX_DEPTH,
+    MAX_IMAGE_SIDE,
+    MAX_SPP,
+    Camera,
+    RenderSettings,
+)
+from tracer.scene.values import Reader, suggest
+from tracer.scene.vectors import cross, norm, sub
+
+#: Up and the viewing direction whose angle has a sine below this are parallel: the camera's
+#: right vector, their cross product, would be rounding noise.
+PARALLEL_UP = 1e-12
+#: The core's seed is an unsigned 64-bit integer (tracer/cpp/09_scene.h).
+MAX_SEED = 2**64 - 1
+
+
+def read_camera(r: Reader, data: Any) -> Camera:
+    t = r.table(data, "camera", {"eye", "look_at", "up", "fov_y", "width", "height"})
+    d = Camera(eye=(0, 0, 0), look_at=(0, 0, -1))
+    eye = r.vec3(t, "camera", "eye", required=True)
+    look_at = r.vec3(t, "camera", "look_at", required=True)
+    up = r.vec3(t, "camera", "up", default=d.up, nonzero=True)
+    fov_y = r.number(t, "camera", "fov_y", default=d.fov_y, above=0.0, below=180.0)
+    width = r.integer(t, "camera", "width", default=d.width, low=1, high=MAX_IMAGE_SIDE)
+    height = r.integer(t, "camera", "height", default=d.height, low=1, high=MAX_IMAGE_SIDE)
+    forward = sub(look_at, eye)
+    if norm(forward) == 0.0:
+        raise SceneError(r.source, "camera.look_at", "must differ from camera.eye")
+    side = cross(forward, up)
+    if norm(side) <= PARALLEL_UP * norm(forward) * norm(up):
+        raise SceneError(r.source, "camera.up", "must not be parallel to the viewing direction")
+    return Camera(eye=eye, look_at=look_at, up=up, fov_y=fov_y, width=width, height=height)
+
+
+def read_render(r: Reader, data: Any) -> RenderSettings:
+    keys = {f.name for f in dataclasses.fields(RenderSettings)}
+    t = r.table(data, "render", keys)
+    d = RenderSettings()
+    integrator = r.string(t, "render", "integrator", default=d.integrator)
+    if integrator not in INTEGRATORS:
+        raise SceneError(
+            r.source,
+            "render.integrator",
+            f"expected one of {', '.join(map(repr, INTEGRATORS))}, got {integrator!r}"
+            + suggest(integrator, INTEGRATORS),
+        )
+    return RenderSettings(
+        integrator=integrator,
+        max_depth=r.integer(t, "render", "max_depth", default=d.max_depth, low=1, high=MAX_DEPTH),
+        min_coefficient=r.number(t, "render", "min_coefficient", default=d.min_coefficient, low=0),
+        spp=r.integer(t, "render", "spp", default=d.spp, low=1, high=MAX_SPP),
+        seed=r.integer(t, "render", "seed", default=d.seed, low=0, high=MAX_SEED),
+        background=r.color(t, "render", "background", default=d.background),
+        ambient_light=r.color(t, "render", "ambient_light", default=d.ambient_light),
+        acceleration=r.choice(t, "render", "acceleration", ACCELERATIONS, default=d.acceleration),
+    )
