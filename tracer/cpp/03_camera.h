@@ -10,6 +10,7 @@
 #include <cmath>
 
 #include "02_ray.h"
+#include "constants.h"
 
 namespace rt {
 
@@ -26,7 +27,7 @@ struct Camera {
         forward = normalize(look_at - eye);
         right = normalize(cross(forward, up));
         true_up = cross(right, forward);
-        plane_height = 2 * std::tan(fov_y * M_PI / 360.0);
+        plane_height = 2 * std::tan(fov_y * pi / 360.0);
         plane_width = plane_height * width / height;
     }
 

@@ -16,7 +16,10 @@
 #include <cmath>
 #include <utility>
 
+#include "01_vec3.h"
+#include "02_ray.h"
 #include "04_hit.h"
+#include "constants.h"
 
 namespace rt {
 

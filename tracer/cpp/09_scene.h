@@ -12,11 +12,15 @@
 #include <memory>
 #include <vector>
 
+#include "01_vec3.h"
+#include "02_ray.h"
 #include "03_camera.h"
+#include "04_hit.h"
 #include "05_sphere.h"
 #include "06_plane.h"
 #include "07_material.h"
 #include "08_light.h"
+#include "constants.h"
 
 namespace rt {
 

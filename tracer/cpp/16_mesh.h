@@ -10,10 +10,16 @@
 
 #include <algorithm>
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
+#include "01_vec3.h"
+#include "02_ray.h"
+#include "04_hit.h"
+#include "14_box.h"
 #include "15_triangle.h"
+#include "constants.h"
 
 namespace rt {
 

@@ -4,9 +4,13 @@
 #pragma once
 
 #include <cmath>
-#include <utility>
+#include <initializer_list>
 
-#include "16_mesh.h"
+#include "01_vec3.h"
+#include "02_ray.h"
+#include "04_hit.h"
+#include "13_transform.h"
+#include "constants.h"
 
 namespace rt {
 

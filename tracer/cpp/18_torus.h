@@ -11,11 +11,14 @@
 // but it cannot miss a root that changes sign, nor report one that does not exist.
 #pragma once
 
-#include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <vector>
 
-#include "17_cylinder.h"
+#include "01_vec3.h"
+#include "02_ray.h"
+#include "04_hit.h"
+#include "13_transform.h"
 
 namespace rt {
 

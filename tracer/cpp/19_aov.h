@@ -5,8 +5,13 @@
 // `aov` integrator can check without any shading model.
 #pragma once
 
+#include <cstddef>
+
+#include "02_ray.h"
+#include "03_camera.h"
+#include "04_hit.h"
 #include "09_scene.h"
-#include "18_torus.h"
+#include "constants.h"
 
 namespace rt {
 
