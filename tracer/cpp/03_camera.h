@@ -9,6 +9,7 @@
 
 #include <cmath>
 
+#include "01_vec3.h"
 #include "02_ray.h"
 #include "constants.h"
 

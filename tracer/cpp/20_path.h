@@ -29,8 +29,10 @@
 
 #include "01_vec3.h"
 #include "02_ray.h"
+#include "03_camera.h"
 #include "04_hit.h"
 #include "05_sphere.h"
+#include "06_plane.h"
 #include "07_material.h"
 #include "08_light.h"
 #include "09_scene.h"
@@ -107,7 +109,7 @@ struct BSDF {
         }
         return f;
     }
-    // The solid-angle density of sample() choosing wi, for the non-delta lobes.
+    // The solid-angle density of sample_bsdf() choosing wi, for the non-delta lobes.
     double pdf(const Vec3 &wo, const Vec3 &wi) const {
         double cos_i = dot(wi, N);
         if (cos_i <= 0 || dot(wo, N) <= 0) return 0;
