@@ -9,7 +9,7 @@ from importlib import resources
 from pathlib import Path
 
 from tracer.image import ImageFormatError, image_format, save_aov, save_image
-from tracer.render import aov_channels, render_progressive, render_with_stats
+from tracer.render import ImageTooLargeError, aov_channels, render_progressive, render_with_stats
 from tracer.scene import Scene, SceneError, load_scene
 
 DEMO_SCENE = "ex25.toml"
@@ -241,7 +241,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         args.func(args)
-    except (SceneError, ImageFormatError) as exc:
+    except (SceneError, ImageFormatError, ImageTooLargeError) as exc:
         print(f"rtlab: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

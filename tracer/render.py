@@ -57,21 +57,26 @@ def _meminfo_available() -> int | None:
 def _cgroup_available() -> int | None:
     """What the memory limit of this process's control group (a container's) leaves: limit -
     usage, in cgroup v2 (memory.max, memory.current) or v1 (memory.limit_in_bytes,
-    memory.usage_in_bytes); None where there is no limit."""
-    groups = [""]
+    memory.usage_in_bytes), in the process's own group or, where that is not visible (inside a
+    container), the root; None where there is no limit."""
+    v2, v1 = [""], [""]
     for line in (_read("/proc/self/cgroup") or "").splitlines():
-        if line.startswith("0::"):  # v2: the group's path under /sys/fs/cgroup
-            groups.insert(0, line[3:].strip())
-    for group in groups:
-        base = "/sys/fs/cgroup" + group.rstrip("/")
-        limit, usage = _read(base + "/memory.max"), _read(base + "/memory.current")
-        if limit is not None and usage is not None:
-            if limit.strip() == "max":
-                return None
-            return max(0, int(limit) - int(usage))
-    limit = _read("/sys/fs/cgroup/memory/memory.limit_in_bytes")
-    usage = _read("/sys/fs/cgroup/memory/memory.usage_in_bytes")
-    if limit is not None and usage is not None and int(limit) < 2**62:  # 2^63 - 4096: no limit
+        number, controllers, path = (line.split(":", 2) + ["", ""])[:3]
+        if number == "0" and not controllers:
+            v2.insert(0, path.strip().rstrip("/"))
+        elif "memory" in controllers.split(","):
+            v1.insert(0, path.strip().rstrip("/"))
+    candidates = [(f"/sys/fs/cgroup{g}", "memory.max", "memory.current") for g in v2] + [
+        (f"/sys/fs/cgroup/memory{g}", "memory.limit_in_bytes", "memory.usage_in_bytes")
+        for g in v1
+    ]
+    for base, limit_file, usage_file in candidates:
+        limit, usage = _read(f"{base}/{limit_file}"), _read(f"{base}/{usage_file}")
+        if limit is None or usage is None:
+            continue
+        # v2 writes "max" for no limit; v1 a number near 2^63.
+        if limit.strip() == "max" or int(limit) >= 2**62:
+            return None
         return max(0, int(limit) - int(usage))
     return None
 
