@@ -24,6 +24,7 @@
 
 namespace rt {
 
+// The defaults are the scene language's (the Python package tracer.scene sets every field).
 struct Settings {
     int max_depth = 5;            // the primary ray is level 1
     double min_coefficient = 0;   // a level whose chain coefficient is below this is black

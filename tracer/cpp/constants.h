@@ -9,8 +9,8 @@ namespace rt {
 // which compares greater than every finite double and survives min() and max().
 constexpr double infinity = std::numeric_limits<double>::infinity();
 
-// The double nearest pi (21 digits pin it whatever the rounding of the literal; std::numbers::pi
-// is C++20 and M_PI is POSIX, not standard C++).
+// The double nearest pi: 21 significant digits, more than the 17 that single out a double.
+// (std::numbers::pi is C++20; M_PI is POSIX, not standard C++.)
 constexpr double pi = 3.14159265358979323846;
 
 } // namespace rt
