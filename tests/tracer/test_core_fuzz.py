@@ -300,6 +300,36 @@ def test_the_named_degenerate_cases_render():
         assert_image_is_finite(scene, tracer.render(scene, threads=1, progress=False))
 
 
+def test_what_the_fuzz_found():
+    """Each was a NaN or undefined behaviour in the core before it was fixed: an emitting
+    triangle of area 7e-153, whose light density squared overflowed in the power heuristic
+    (inf / inf); and shininess 1e300, whose exponent broke power()'s rounding trick (a left
+    shift of a negative number, which UBSan reports under make sanitize)."""
+    sliver = [[0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.4882790216348415e-152, 0.0]]
+    data = scene_dict(
+        camera={"eye": [2.0, 0.5, 0.5], "look_at": [0.0, 0.0, 0.5], "width": 4, "height": 3},
+        render={"integrator": "path", "max_depth": 3, "spp": 4},
+        materials={"a": {"emission": [0.0, 0.0, 1.0]}, "b": {"diffuse": 0.8}},
+        objects=[
+            {"type": "triangle", "vertices": sliver, "material": "a"},
+            {"type": "plane", "point": [0.0, -1.0, 0.0], "normal": [0, 1, 0], "material": "b"},
+        ],
+    )
+    scene = tracer.load_scene(data)
+    assert_image_is_finite(scene, tracer.render(scene, threads=1, progress=False))
+    shiny = {"ambient": 0.1, "diffuse": 0.5, "specular": 1.0, "shininess": 1e300}
+    data = scene_dict(
+        camera={"width": 8, "height": 6},
+        materials={"m": shiny},
+        lights=[{"type": "point", "position": [0.0, 0.0, 5.0]}],
+        objects=[{"type": "sphere", "center": [0.0, 0.0, 0.0], "radius": 1.0, "material": "m"}],
+    )
+    scene = tracer.load_scene(data)
+    image = tracer.render(scene, threads=1, progress=False)
+    assert_image_is_finite(scene, image)
+    assert image.max() > 0.1  # the ambient and Lambert terms still show
+
+
 # ------------------------------------------------------------------ memory
 
 

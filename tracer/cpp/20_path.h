@@ -150,7 +150,15 @@ inline bool sample_bsdf(const BSDF &b, const Vec3 &wo, double u0, double u1, dou
 // Multiple importance sampling, the power heuristic (Veach 1997, eq. 9.13).
 inline double power_heuristic(double f, double g) {
     double f2 = f * f, g2 = g * g;
-    return f2 + g2 > 0 ? f2 / (f2 + g2) : 0;
+    if (f2 + g2 < infinity) return f2 + g2 > 0 ? f2 / (f2 + g2) : 0;
+    // A density whose square overflows (a light of area 1e-150 seen edge on): the same weight,
+    // from the ratio of the two, where inf / inf would give NaN.
+    if (f >= g) {
+        double r = g / f;
+        return 1 / (1 + r * r);
+    }
+    double r = f / g;
+    return r * r / (1 + r * r);
 }
 
 // Emitting objects that next-event estimation can sample a point on: spheres and triangle
@@ -243,11 +251,12 @@ struct PathContext {
         }
         n_sampled = int(area_lights.size()) + (environment ? 1 : 0);
     }
-    // A light whose area is 0 (a sphere of radius 1e-300) or overflows (radius 1e200) has no
-    // finite density 1 / area to sample its points by; it still emits when a path hits it, with
-    // the scattered ray as the only strategy (as planes and boxes do).
+    // A light whose area is 0 (a sphere of radius 1e-300), below 1e-308 (so that 1 / area
+    // overflows) or infinite (radius 1e200) has no finite density 1 / area to sample its
+    // points by; it still emits when a path hits it, with the scattered ray as the only
+    // strategy (as planes and boxes do).
     void add(const AreaLight &l) {
-        if (!(l.area > 0 && l.area < infinity)) return;
+        if (!(l.area < infinity && 1 / l.area < infinity)) return;
         area_light_of_object[size_t(l.object)] = int(area_lights.size());
         area_lights.push_back(l);
     }
