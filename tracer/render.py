@@ -61,14 +61,13 @@ def _cgroup_available() -> int | None:
     container), the root; None where there is no limit."""
     v2, v1 = [""], [""]
     for line in (_read("/proc/self/cgroup") or "").splitlines():
-        number, controllers, path = (line.split(":", 2) + ["", ""])[:3]
+        number, controllers, path = [*line.split(":", 2), "", ""][:3]
         if number == "0" and not controllers:
             v2.insert(0, path.strip().rstrip("/"))
         elif "memory" in controllers.split(","):
             v1.insert(0, path.strip().rstrip("/"))
     candidates = [(f"/sys/fs/cgroup{g}", "memory.max", "memory.current") for g in v2] + [
-        (f"/sys/fs/cgroup/memory{g}", "memory.limit_in_bytes", "memory.usage_in_bytes")
-        for g in v1
+        (f"/sys/fs/cgroup/memory{g}", "memory.limit_in_bytes", "memory.usage_in_bytes") for g in v1
     ]
     for base, limit_file, usage_file in candidates:
         limit, usage = _read(f"{base}/{limit_file}"), _read(f"{base}/{usage_file}")
@@ -326,4 +325,4 @@ def render_progressive(
         if elapsed + elapsed / passes > seconds:
             break
     image = (total / passes).astype(np.float32)
-    return RenderResult(image, rays, time.perf_counter() - start, result.threads)
+    return RenderResult(image, rays, time.perf_counter() - start, result.threads, result.integrator)
