@@ -303,8 +303,9 @@ def test_the_named_degenerate_cases_render():
 def test_what_the_fuzz_found():
     """Each was a NaN or undefined behaviour in the core before it was fixed: an emitting
     triangle of area 7e-153, whose light density squared overflowed in the power heuristic
-    (inf / inf); and shininess 1e300, whose exponent broke power()'s rounding trick (a left
-    shift of a negative number, which UBSan reports under make sanitize)."""
+    (inf / inf); shininess 1e300, whose exponent broke power()'s rounding trick (a left shift
+    of a negative number, which UBSan reports under make sanitize); and an aov ray grazing a
+    plane at a distance beyond float32's range, whose depth read as inf, a miss, on a hit."""
     sliver = [[0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.4882790216348415e-152, 0.0]]
     data = scene_dict(
         camera={"eye": [2.0, 0.5, 0.5], "look_at": [0.0, 0.0, 0.5], "width": 4, "height": 3},
@@ -328,6 +329,23 @@ def test_what_the_fuzz_found():
     image = tracer.render(scene, threads=1, progress=False)
     assert_image_is_finite(scene, image)
     assert image.max() > 0.1  # the ambient and Lambert terms still show
+    tilted = [0.0, 1.0, 1.467376386462038e-247]
+    data = scene_dict(
+        camera={
+            "eye": [1.0, 0.0, 0.0],
+            "look_at": [0.0, 0.0, 0.0],
+            "fov_y": 179.999,
+            "width": 4,
+            "height": 3,
+        },
+        render={"integrator": "aov"},
+        objects=[{"type": "plane", "point": [0.0, 1.0, 0.0], "normal": tilted, "material": "m"}],
+    )
+    scene = tracer.load_scene(data)
+    image = tracer.render(scene, threads=1, progress=False)
+    assert_image_is_finite(scene, image)
+    hits = image[..., 1] >= 0
+    assert image[..., 0][hits].max() == np.finfo(np.float32).max  # the far hit, saturated
 
 
 # ------------------------------------------------------------------ memory
