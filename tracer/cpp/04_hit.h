@@ -53,7 +53,7 @@ struct ShadowRay {
 };
 
 // Towards a point: the direction is left unnormalised, point - origin, so that the point sits
-// at t = 1 exactly and only what lies in (0, 1) is between.
+// at t = 1 and what lies in (0, 1) is between (no square root, no division by the distance).
 inline ShadowRay shadow_ray_to(const Hit &hit, const Vec3 &Ng, const Vec3 &point) {
     Vec3 o = offset_ray_origin(hit.p, hit.p_error, Ng, point - hit.p);
     return {{o, point - o}, 1.0};
