@@ -305,7 +305,9 @@ def test_what_the_fuzz_found():
     triangle of area 7e-153, whose light density squared overflowed in the power heuristic
     (inf / inf); shininess 1e300, whose exponent broke power()'s rounding trick (a left shift
     of a negative number, which UBSan reports under make sanitize); and an aov ray grazing a
-    plane at a distance beyond float32's range, whose depth read as inf, a miss, on a hit."""
+    plane at a distance beyond float32's range, whose depth read as inf, a miss, on a hit; a
+    sphere and a cylinder of radius 1e-300 at 3.7e-207 from the eye, smaller than the spacing of
+    doubles there, whose hit point fell on the centre (normal 0 / 0)."""
     sliver = [[0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.4882790216348415e-152, 0.0]]
     data = scene_dict(
         camera={"eye": [2.0, 0.5, 0.5], "look_at": [0.0, 0.0, 0.5], "width": 4, "height": 3},
@@ -346,6 +348,36 @@ def test_what_the_fuzz_found():
     assert_image_is_finite(scene, image)
     hits = image[..., 1] >= 0
     assert image[..., 0][hits].max() == np.finfo(np.float32).max  # the far hit, saturated
+    z = 3.6785700024424245e-207
+    for tiny in (
+        {"type": "sphere", "center": [0.0, 0.0, z], "radius": 1e-300, "material": "m"},
+        {
+            "type": "cylinder",
+            "base": [0.0, -1.0, z],
+            "top": [0.0, 1.0, z],
+            "radius": 1e-300,
+            "material": "m",
+        },
+    ):
+        for integrator in ("aov", "classic"):
+            data = scene_dict(
+                camera={
+                    "eye": [0.0, 0.0, 0.0],
+                    "look_at": [0.0, 0.0, 1.0],
+                    "fov_y": 1e-6,
+                    "width": 4,
+                    "height": 3,
+                },
+                render={"integrator": integrator},
+                materials={"m": shiny},
+                lights=[{"type": "directional", "direction": [0.0, 0.0, 1.0]}],
+                objects=[tiny],
+            )
+            scene = tracer.load_scene(data)
+            image = tracer.render(scene, threads=1, progress=False)
+            assert_image_is_finite(scene, image)
+            if integrator == "aov":
+                assert (image[..., 1] == 0).all()  # every ray hits it
 
 
 # ------------------------------------------------------------------ memory

@@ -252,7 +252,13 @@ inline HitL hit_record(const Scene &scene, const RayL &ray, const ClosestL &c, M
     const bool spheres = any(active & is_sphere), planes = any(active & ~is_sphere);
     if (spheres) { // project onto the sphere
         Vec3L local = at - centre;
-        local = local * (radius / sqrt(dot(local, local)));
+        Lanes len = sqrt(dot(local, local));
+        const Mask degenerate = active & is_sphere & ~(len > 0); // as sphere_hit()
+        if (any(degenerate)) {
+            local = select(degenerate, -ray.d, local);
+            len = select(degenerate, sqrt(dot(local, local)), len);
+        }
+        local = local * (radius / len);
         h.p = centre + local;
         h.p_error = (abs(centre) + abs(local)) * splat(gamma(7));
         h.N = local / radius;

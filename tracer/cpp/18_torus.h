@@ -117,7 +117,11 @@ struct Torus : Object {
             Vec3 p = o + s * u;
             double rho = std::sqrt(p.x * p.x + p.y * p.y);
             Vec3 ring = rho > 0 ? Vec3{R * p.x / rho, R * p.y / rho, 0} : Vec3{R, 0, 0};
-            Vec3 N = normalize(p - ring);
+            // normalize(p - ring); for a tube thinner than the spacing of doubles on the ring
+            // there is no direction left (as in 05_sphere.h sphere_hit()): face the ray.
+            Vec3 v = p - ring;
+            double len = length(v);
+            Vec3 N = len > 0 ? v / len : -u;
             p = ring + r * N;
             transform.place(*this, t, p, gamma(8) * (abs(ring) + abs(r * N)), N, hit);
             return true;
