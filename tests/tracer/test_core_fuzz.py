@@ -307,7 +307,9 @@ def test_what_the_fuzz_found():
     of a negative number, which UBSan reports under make sanitize); and an aov ray grazing a
     plane at a distance beyond float32's range, whose depth read as inf, a miss, on a hit; a
     sphere and a cylinder of radius 1e-300 at 3.7e-207 from the eye, smaller than the spacing of
-    doubles there, whose hit point fell on the centre (normal 0 / 0)."""
+    doubles there, whose hit point fell on the centre (normal 0 / 0); and a point light on the
+    surface it lights, whose direction 0 / 0 made the one-ray tracer NaN where the packet
+    tracer, testing N.L > 0, had skipped it."""
     sliver = [[0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.4882790216348415e-152, 0.0]]
     data = scene_dict(
         camera={"eye": [2.0, 0.5, 0.5], "look_at": [0.0, 0.0, 0.5], "width": 4, "height": 3},
@@ -378,6 +380,36 @@ def test_what_the_fuzz_found():
             assert_image_is_finite(scene, image)
             if integrator == "aov":
                 assert (image[..., 1] == 0).all()  # every ray hits it
+    on_the_light = [
+        {"type": "plane", "point": [0.0, 1e-300, 0.0], "normal": [0, 1, 0], "material": "m"},
+        {
+            "type": "box",
+            "min": [0.0, 0.0, 0.0],
+            "max": [2.0, 2.0, 2e-300],
+            "material": "m",
+            "transform": {"scale": [1.0, 1.0, -1.0]},
+        },
+    ]
+    for obj in on_the_light:
+        for integrator in ("classic", "path"):
+            data = scene_dict(
+                camera={
+                    "eye": [0.0, 0.0, 0.0],
+                    "look_at": [0.0, 0.0, -1.0],
+                    "fov_y": 1e-6,
+                    "width": 4,
+                    "height": 3,
+                },
+                render={"integrator": integrator},
+                materials={"m": {"ambient": 0.1, "diffuse": 0.6}},
+                lights=[{"type": "point", "position": [0.0, 0.0, 0.0]}],
+                objects=[obj],
+            )
+            scene = tracer.load_scene(data)
+            one_ray = tracer.render_with_stats(scene, threads=1, progress=False, packets=False)
+            assert_image_is_finite(scene, one_ray.image)
+            packets = tracer.render_with_stats(scene, threads=1, progress=False)
+            assert np.array_equal(one_ray.image, packets.image)
 
 
 # ------------------------------------------------------------------ memory

@@ -77,7 +77,9 @@ inline Color local_color(const Scene &scene, const Material &m, const Hit &hit, 
     for (const Light &light : scene.lights) {
         Vec3 L = to_light(light, hit.p);
         double NL = lambert_term(N, L);
-        if (NL <= 0) continue; // the light is behind the surface
+        // The light is behind the surface, or sits on the hit point itself, where L = 0 / 0 has
+        // no direction (NaN fails every comparison; 12_packet.h tests NL > 0 the same way).
+        if (!(NL > 0)) continue;
         if (in_shadow(scene, shadow_ray(hit, Ng, light), counts)) continue;
         color += (m.diffuse * NL) * (m.color * light.color);
         if (m.specular != 0) color += (m.specular * phong_term(R, L, m.shininess)) * light.color;

@@ -323,7 +323,8 @@ inline Color trace_path(const PathContext &ctx, Ray ray, Rng &rng, RayCounts &co
                     Li = light.color; // irradiance
                 }
                 double cos_i = dot(wi, N);
-                if (cos_i <= 0 || dot(wi, Ng) <= 0) continue;
+                // Behind the surface, or a point light on the hit point itself (wi = 0 / 0).
+                if (!(cos_i > 0 && dot(wi, Ng) > 0)) continue;
                 if (!in_shadow(scene, shadow_ray(hit, Ng, light), counts))
                     L += beta * bsdf.eval(wo, wi) * Li * cos_i;
             }
