@@ -11,7 +11,7 @@ APT_PACKAGES := povray libllvm19 libosmesa6
 CPP_SOURCES := CMakeLists.txt pyproject.toml $(wildcard tracer/cpp/*.h tracer/cpp/*.cpp)
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: setup system demo test lint format bench clean
+.PHONY: setup system demo test lint format bench clean sanitize
 
 setup: $(VENV)/.built
 
@@ -62,6 +62,33 @@ format: setup
 
 test: setup lint
 	$(PY) -m pytest
+
+# The core built with AddressSanitizer and UndefinedBehaviorSanitizer (CMake's RTLAB_SANITIZE,
+# in build/sanitize: .venv's own build is left alone), then the tests that exercise the core
+# (tests/tracer) run against it, in one process that loads it as tracer._core. The sanitizer's
+# runtime must be the process's first library, hence LD_PRELOAD (dropped again for the
+# processes the tests start, which run the ordinary build); CPython keeps memory until exit by
+# design, so leak reports are off; any other report ends the run with an error, and
+# --capture=sys lets it reach the terminal. Deselected: the demo verb, which runs POV-Ray and
+# Mitsuba (their JIT and runtimes are not ours to check).
+SANITIZE_DIR := build/sanitize
+SANITIZE_PYTEST := "-q", "--capture=sys", "-p", "no:cacheprovider", "-p", "no:xdist", \
+  "--deselect", "tests/tracer/test_cli_and_io.py::test_check_and_demo_verbs", "tests/tracer"
+SANITIZE_RUN := import glob, importlib.util, os, sys; \
+  os.environ.pop("LD_PRELOAD"); \
+  spec = importlib.util.spec_from_file_location("tracer._core", glob.glob("$(SANITIZE_DIR)/_core.*.so")[0]); \
+  core = importlib.util.module_from_spec(spec); sys.modules["tracer._core"] = core; \
+  spec.loader.exec_module(core); \
+  assert core.sanitized, "not the sanitized build"; \
+  import pytest; sys.exit(pytest.main([$(SANITIZE_PYTEST)]))
+
+sanitize: setup
+	$(VENV)/bin/cmake -S . -B $(SANITIZE_DIR) -G Ninja -DCMAKE_MAKE_PROGRAM=$(abspath $(VENV)/bin/ninja) \
+	  -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRTLAB_SANITIZE=ON -DPython_EXECUTABLE=$(abspath $(PY)) \
+	  -Dnanobind_DIR="$$($(PY) -m nanobind --cmake_dir)" >/dev/null
+	$(VENV)/bin/cmake --build $(SANITIZE_DIR)
+	LD_PRELOAD="$$(c++ -print-file-name=libasan.so)" ASAN_OPTIONS=detect_leaks=0 \
+	  UBSAN_OPTIONS=print_stacktrace=1 $(PY) -c '$(SANITIZE_RUN)'
 
 clean:
 	rm -rf build out $(VENV) .pytest_cache .ruff_cache

@@ -1,10 +1,11 @@
 """rtlab's ray tracer: the course's classic algorithm, in C++, with a Python face."""
 
 from tracer.image import load_exr_channels, load_image, save_aov, save_image
-from tracer.render import RenderResult, aov_channels, render, render_with_stats
+from tracer.render import ImageTooLargeError, RenderResult, aov_channels, render, render_with_stats
 from tracer.scene import Scene, SceneError, load_scene
 
 __all__ = [
+    "ImageTooLargeError",
     "RenderResult",
     "Scene",
     "SceneError",

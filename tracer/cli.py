@@ -8,12 +8,17 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from tracer.image import ImageFormatError, image_format, save_aov, save_image
-from tracer.render import aov_channels, render_progressive, render_with_stats
+from tracer.render import ImageTooLargeError, aov_channels, render_progressive, render_with_stats
 from tracer.scene import Scene, SceneError, load_scene
+from tracer.scene.values import suggest
 
 # The demo scene lives with the scenes; re-exported here, where tests and users call it.
 from tracer.scenes import DEMO_SCENE as DEMO_SCENE
 from tracer.scenes import demo_scene_path as demo_scene_path
+
+
+class UsageError(ValueError):
+    """A command line the verbs cannot run (an unknown renderer or suite): not about a scene."""
 
 
 def _positive_int(text: str) -> int:
@@ -152,7 +157,10 @@ def cmd_compare(args: argparse.Namespace) -> int:
     against = tuple(a.strip() for a in args.against.split(",") if a.strip())
     for name in against:
         if name not in REFERENCES:
-            raise SceneError("--against", "", f"unknown renderer {name!r}; expected {REFERENCES}")
+            raise UsageError(
+                f"--against: unknown renderer {name!r}{suggest(name, REFERENCES)}; "
+                f"expected a comma-separated list of {', '.join(REFERENCES)}"
+            )
     scene = _apply_overrides(load_scene(args.scene), args)
     if "povray" in against:
         _classic_only(scene, "POV-Ray")
@@ -181,8 +189,10 @@ def cmd_bench(args: argparse.Namespace) -> None:
 
     names = list(SUITES) if args.suite == "all" else [args.suite]
     if names[0] not in SUITES:
-        known = ", ".join(SUITES)
-        raise SceneError("bench", "", f"unknown suite {args.suite!r}; expected all or {known}")
+        raise UsageError(
+            f"bench: unknown suite {args.suite!r}{suggest(args.suite, [*SUITES, 'all'])}; "
+            f"expected all or {', '.join(SUITES)}"
+        )
     rows = run_suites(names, args.json)
     print(format_ratios(rows))
     if args.json:
@@ -320,7 +330,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     previous = _signals_interrupt()
     try:
         return args.func(args) or 0
-    except (SceneError, ImageFormatError) as exc:
+    except (SceneError, ImageFormatError, ImageTooLargeError, UsageError) as exc:
         print(f"rtlab: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:

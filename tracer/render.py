@@ -32,6 +32,88 @@ from tracer.scene import (
 AOV_CHANNELS = ("depth", "object_id", "N.X", "N.Y", "N.Z")
 
 
+class ImageTooLargeError(MemoryError):
+    """A render refused before it starts: its image would not fit in the memory this process
+    may still use. (Not a SceneError: the scene is valid, this machine is too small for it.)"""
+
+
+def _read(path: str) -> str | None:
+    try:
+        with open(path) as f:
+            return f.read()
+    except OSError:
+        return None
+
+
+def _meminfo_available() -> int | None:
+    """MemAvailable of /proc/meminfo: what the kernel can give without swapping."""
+    text = _read("/proc/meminfo")
+    for line in (text or "").splitlines():
+        if line.startswith("MemAvailable:"):
+            return int(line.split()[1]) * 1024  # the file counts in kiB
+    return None
+
+
+def _cgroup_available() -> int | None:
+    """What the memory limit of this process's control group (a container's) leaves: limit -
+    usage, in cgroup v2 (memory.max, memory.current) or v1 (memory.limit_in_bytes,
+    memory.usage_in_bytes), in the process's own group or, where that is not visible (inside a
+    container), the root; None where there is no limit."""
+    v2, v1 = [""], [""]
+    for line in (_read("/proc/self/cgroup") or "").splitlines():
+        number, controllers, path = [*line.split(":", 2), "", ""][:3]
+        if number == "0" and not controllers:
+            v2.insert(0, path.strip().rstrip("/"))
+        elif "memory" in controllers.split(","):
+            v1.insert(0, path.strip().rstrip("/"))
+    candidates = [(f"/sys/fs/cgroup{g}", "memory.max", "memory.current") for g in v2] + [
+        (f"/sys/fs/cgroup/memory{g}", "memory.limit_in_bytes", "memory.usage_in_bytes") for g in v1
+    ]
+    for base, limit_file, usage_file in candidates:
+        limit, usage = _read(f"{base}/{limit_file}"), _read(f"{base}/{usage_file}")
+        if limit is None or usage is None:
+            continue
+        # v2 writes "max" for no limit; v1 a number near 2^63.
+        if limit.strip() == "max" or int(limit) >= 2**62:
+            return None
+        return max(0, int(limit) - int(usage))
+    return None
+
+
+def memory_available() -> tuple[int, str] | None:
+    """The bytes this process may still allocate and where the figure comes from: the smaller
+    of MemAvailable and what the cgroup limit leaves; None where neither can be read."""
+    found = [
+        (n, what)
+        for n, what in (
+            (_meminfo_available(), "MemAvailable in /proc/meminfo"),
+            (_cgroup_available(), "the cgroup memory limit"),
+        )
+        if n is not None
+    ]
+    return min(found) if found else None
+
+
+def _gib(n: int) -> str:
+    return f"{n / 2**30:.1f} GiB"
+
+
+def check_memory(scene: Scene, bytes_per_value: int = 4) -> None:
+    """Refuse, before anything is allocated, a render whose image (float32 values: 3 per pixel,
+    5 for aov) would not fit in the memory left, rather than let the kernel kill the process
+    half way through. ``bytes_per_value`` counts every copy a caller keeps of each value."""
+    c = scene.camera
+    channels = len(AOV_CHANNELS) if scene.render.integrator == "aov" else 3
+    needed = c.width * c.height * channels * bytes_per_value
+    available = memory_available()
+    if available is not None and needed > available[0]:
+        raise ImageTooLargeError(
+            f"{scene.source}: a {c.width}x{c.height} image needs {needed} bytes "
+            f"({_gib(needed)}), and {available[0]} bytes ({_gib(available[0])}) are available "
+            f"({available[1]}); render it smaller"
+        )
+
+
 @dataclass(frozen=True)
 class RenderResult:
     #: classic: linear RGB, shape (height, width, 3); aov: (height, width, 5), the channels of
@@ -41,6 +123,10 @@ class RenderResult:
     rays: dict[str, int]  # counts of primary, secondary (reflected) and shadow rays
     seconds: float  # wall time of the render itself
     threads: int
+    #: what traced the image: "classic" (one ray at a time), "classic_packets" (a packet of rays
+    #: at a time: scenes of spheres and planes only, so packets=True falls back to "classic"
+    #: elsewhere), "aov" or "path".
+    integrator: str = "classic"
 
 
 def default_threads() -> int:
@@ -147,21 +233,31 @@ def _check_threads(threads: int | None) -> int:
     return threads
 
 
+def core_integrator(scene: Scene, packets: bool = True) -> _core.Integrator:
+    """The core's integrator for the scene's ``render.integrator``; ``packets`` chooses between
+    the classic model's two tracers (packets serve scenes of spheres and planes only; the core
+    falls back to one ray at a time elsewhere and reports it)."""
+    if scene.render.integrator == "aov":
+        return _core.Integrator.aov
+    if scene.render.integrator == "path":
+        return _core.Integrator.path
+    return _core.Integrator.classic_packets if packets else _core.Integrator.classic
+
+
 def _render_core(
     scene: Scene, core: _core.Scene, threads: int, progress: bool | None, packets: bool
 ) -> RenderResult:
     """Render a core scene already built from ``scene`` (its hierarchies included)."""
+    check_memory(scene)
     if progress is None:
         progress = sys.stderr.isatty()
     callback, close = _progress_bar() if progress else (None, lambda: None)
     start = time.perf_counter()
     try:
-        aov = scene.render.integrator == "aov"
-        path = scene.render.integrator == "path"
-        image, rays = _core.render(core, threads, callback, packets, aov, path)
+        image, rays, ran = _core.render(core, threads, callback, core_integrator(scene, packets))
     finally:
         close()
-    return RenderResult(image, dict(rays), time.perf_counter() - start, threads)
+    return RenderResult(image, dict(rays), time.perf_counter() - start, threads, ran.name)
 
 
 def render_with_stats(
@@ -177,6 +273,7 @@ def render_with_stats(
     traces packets of rays with SIMD instructions. Both give the same image, bit for bit.
     """
     threads = _check_threads(threads)
+    check_memory(scene)  # before to_core(), which builds the meshes' hierarchies
     return _render_core(scene, to_core(scene), threads, progress, packets)
 
 
@@ -209,6 +306,8 @@ def render_progressive(
     if scene.render.integrator == "aov":
         raise ValueError("an aov render has nothing to refine: render it once")
     threads = _check_threads(threads)
+    # Per value: the float64 sum, a pass's float32 image and the float64 temporary of adding them.
+    check_memory(scene, bytes_per_value=8 + 4 + 8)
     start = time.perf_counter()
     core = to_core(scene)  # once: the passes differ only in their seed
     total: npt.NDArray[np.float64] | None = None
@@ -226,4 +325,4 @@ def render_progressive(
         if elapsed + elapsed / passes > seconds:
             break
     image = (total / passes).astype(np.float32)
-    return RenderResult(image, rays, time.perf_counter() - start, result.threads)
+    return RenderResult(image, rays, time.perf_counter() - start, result.threads, result.integrator)

@@ -252,3 +252,14 @@ def test_povray_refuses_path_scenes(tmp_path, capsys):
     assert "POV-Ray reproduces the classic model only" in capsys.readouterr().err
     assert main(["compare", str(cornell), "--against", "povray"]) == 2
     assert not (tmp_path / "c.pov").exists()
+
+
+def test_usage_errors_suggest_the_near_name_and_are_not_scene_errors(capsys):
+    from tracer.cli import UsageError
+    from tracer.scene import SceneError
+
+    assert not issubclass(UsageError, SceneError)  # a command line is not a scene
+    assert main(["compare", str(SHADOWS), "--against", "povrya"]) == 2
+    assert "(did you mean 'povray'?)" in capsys.readouterr().err
+    assert main(["bench", "geometri"]) == 2
+    assert "(did you mean 'geometry'?)" in capsys.readouterr().err

@@ -5,11 +5,13 @@ from __future__ import annotations
 import numpy as np
 
 import tracer
-from tracer.cli import demo_scene_path
+from tests.helpers import SCENES
+
+SCENE = SCENES / "ex25.toml"  # the course's Ex 25, as the demo renders it
 
 
 def test_thread_count_does_not_change_the_image():
-    scene = tracer.load_scene(demo_scene_path()).with_overrides(width=97, height=61, spp=5, seed=7)
+    scene = tracer.load_scene(SCENE).with_overrides(width=97, height=61, spp=5, seed=7)
     images = [tracer.render(scene, threads=t) for t in (1, 2, 3, 8)]
     for image in images[1:]:
         assert np.array_equal(image, images[0])
@@ -17,7 +19,7 @@ def test_thread_count_does_not_change_the_image():
 
 def test_jittered_samples_depend_on_the_seed():
     """So the test above is not vacuous: spp > 1 is random, and the seed changes the image."""
-    scene = tracer.load_scene(demo_scene_path()).with_overrides(width=97, height=61, spp=5)
+    scene = tracer.load_scene(SCENE).with_overrides(width=97, height=61, spp=5)
     a = tracer.render(scene.with_overrides(seed=1), threads=2)
     b = tracer.render(scene.with_overrides(seed=2), threads=2)
     assert not np.array_equal(a, b)
@@ -25,27 +27,53 @@ def test_jittered_samples_depend_on_the_seed():
 
 
 def test_one_sample_is_the_pixel_centre_and_needs_no_seed():
-    scene = tracer.load_scene(demo_scene_path()).with_overrides(width=64, height=48)
+    scene = tracer.load_scene(SCENE).with_overrides(width=64, height=48)
     a = tracer.render(scene.with_overrides(seed=1), threads=2)
     b = tracer.render(scene.with_overrides(seed=2), threads=1)
     assert np.array_equal(a, b)
 
 
 def test_render_releases_the_gil():
-    """While the core renders, other Python threads run: the render does not hold the GIL."""
+    """While the core renders, other Python threads run: the render does not hold the GIL.
+
+    The main thread counts in a loop that gives up the GIL at every turn (time.sleep), and the
+    render's progress callback, which the core calls with the GIL every 100 ms, notes the
+    count. If the render released the GIL, the count moves on between two calls; if it held it,
+    the main thread could never take it back, since the callback only runs Python code and the
+    switch interval is set longer than the test, so nothing forces the GIL away from it."""
+    import sys
     import threading
+    import time
 
-    scene = tracer.load_scene(demo_scene_path()).with_overrides(width=1600, height=1200, spp=4)
+    from tracer import _core
+    from tracer.render import to_core
+
+    scene = tracer.load_scene(SCENE).with_overrides(width=1600, height=1200, spp=4)
+    core = to_core(scene)
     done = threading.Event()
-    ticks = 0
+    turns = 0
+    seen: list[int] = []  # the main thread's count at each progress call during the render
 
-    def work():
-        tracer.render(scene, threads=1, progress=False)
-        done.set()
+    def progress(tiles_done: int, tiles_total: int) -> None:
+        if tiles_done < tiles_total:
+            seen.append(turns)
 
-    worker = threading.Thread(target=work)
-    worker.start()
-    while not done.is_set():  # pure Python: it only advances while the GIL is free
-        ticks += 1
-    worker.join()
-    assert ticks > 10_000
+    def work() -> None:
+        try:
+            _core.render(core, 1, progress, _core.Integrator.classic)
+        finally:
+            done.set()
+
+    interval = sys.getswitchinterval()
+    sys.setswitchinterval(1000.0)  # seconds: no forced hand-over of the GIL during the test
+    try:
+        worker = threading.Thread(target=work)
+        worker.start()
+        while not done.is_set():
+            turns += 1
+            time.sleep(0.001)  # releases the GIL, and must take it back to go on
+        worker.join()
+    finally:
+        sys.setswitchinterval(interval)
+    assert len(seen) >= 3, f"the render took too few polls to tell ({len(seen)})"
+    assert seen[-1] > seen[0], f"no Python ran while the core rendered: {seen}"

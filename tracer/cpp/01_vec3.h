@@ -2,7 +2,7 @@
 //
 // All geometry is in double precision: the course asks for "all calculations in global
 // coordinates", and global coordinates of a distant camera or a huge sphere need the 53-bit
-// mantissa (see 04_sphere.h). Images leave the core as float32.
+// mantissa (see 05_sphere.h). Images leave the core as float32.
 #pragma once
 
 #include <cmath>

@@ -9,16 +9,13 @@
 #pragma once
 
 #include <cfloat>
-#include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <limits>
 
 #include "01_vec3.h"
+#include "constants.h"
 
 namespace rt {
-
-constexpr double infinity = std::numeric_limits<double>::infinity();
 
 struct Ray {
     Vec3 o; // origin

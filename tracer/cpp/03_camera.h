@@ -9,10 +9,13 @@
 
 #include <cmath>
 
+#include "01_vec3.h"
 #include "02_ray.h"
+#include "constants.h"
 
 namespace rt {
 
+// The defaults are the scene language's (the Python package tracer.scene sets every field).
 struct Camera {
     Vec3 eye, look_at, up{0, 1, 0};
     double fov_y = 45; // vertical field of view, degrees
@@ -26,7 +29,7 @@ struct Camera {
         forward = normalize(look_at - eye);
         right = normalize(cross(forward, up));
         true_up = cross(right, forward);
-        plane_height = 2 * std::tan(fov_y * M_PI / 360.0);
+        plane_height = 2 * std::tan(fov_y * pi / 360.0); // half the angle, in radians
         plane_width = plane_height * width / height;
     }
 

@@ -3,7 +3,9 @@
 
 #include <cstdint>
 
+#include "01_vec3.h"
 #include "02_ray.h"
+#include "constants.h"
 
 namespace rt {
 
@@ -18,6 +20,49 @@ struct Hit {
 
     bool found() const { return object >= 0; }
 };
+
+// The normals a hit is shaded with, turned to face the ray: the side we see is the side we shade.
+struct Facing {
+    Vec3 N;  // shading normal, on Ng's side
+    Vec3 Ng; // geometric normal, on the side the ray comes from: new rays start off it
+};
+
+// Ng turned against the incoming direction d, and N turned to Ng's side (a smooth mesh's
+// interpolated normal may point away from the face it shades). RTIOW's set_face_normal, for a
+// shading normal and a geometric one (pbrt-v4's FaceForward of the shading frame).
+inline Facing face_the_ray(const Hit &hit, const Vec3 &d) {
+    Vec3 Ng = dot(hit.Ng, d) > 0 ? -hit.Ng : hit.Ng;
+    Vec3 N = dot(hit.N, Ng) < 0 ? -hit.N : hit.N;
+    return {N, Ng};
+}
+
+// The rays that leave a hit (slide "What is a Ray?": secondary and shadow rays) all start just
+// outside the hit's error bound, on the side they leave to (offset_ray_origin(), 02_ray.h),
+// measured along Ng, the surface's own normal; pbrt-v4's SpawnRay and SpawnRayTo (6.8.6).
+
+// A secondary ray: from the surface towards a unit `direction` (a mirror reflection, a
+// scattered path).
+inline Ray secondary_ray(const Hit &hit, const Vec3 &Ng, const Vec3 &direction) {
+    return {offset_ray_origin(hit.p, hit.p_error, Ng, direction), direction};
+}
+
+// A shadow ray and its reach: anything it meets with t in (0, max_t) blocks the light.
+struct ShadowRay {
+    Ray ray;
+    double max_t;
+};
+
+// Towards a point: the direction is left unnormalised, point - origin, so that the point sits
+// at t = 1 and what lies in (0, 1) is between (no square root, no division by the distance).
+inline ShadowRay shadow_ray_to(const Hit &hit, const Vec3 &Ng, const Vec3 &point) {
+    Vec3 o = offset_ray_origin(hit.p, hit.p_error, Ng, point - hit.p);
+    return {{o, point - o}, 1.0};
+}
+
+// Towards a light infinitely far along the unit `direction`: everything ahead is between.
+inline ShadowRay shadow_ray_towards(const Hit &hit, const Vec3 &Ng, const Vec3 &direction) {
+    return {{offset_ray_origin(hit.p, hit.p_error, Ng, direction), direction}, infinity};
+}
 
 // Counts of the three kinds of rays (slide "What is a Ray?") and of the tests they cost: how
 // many ray/box tests (bounding volumes) and ray/primitive tests (spheres, planes, triangles,

@@ -16,7 +16,10 @@
 #include <cmath>
 #include <utility>
 
+#include "01_vec3.h"
+#include "02_ray.h"
 #include "04_hit.h"
+#include "constants.h"
 
 namespace rt {
 
@@ -106,7 +109,12 @@ inline void sphere_hit(const Sphere &s, const Ray &ray, double t, Hit &hit) {
     // Refine the hit point by projecting it onto the sphere (pbrt-v4 6.8.5): whatever error t
     // carries, p is then within a few ulps of the true surface.
     Vec3 local = ray.at(t) - s.center;
-    local = local * (s.radius / length(local));
+    double len = length(local);
+    // A sphere smaller than the spacing of doubles at its centre (radius 1e-300 at 1e-207):
+    // the computed point may fall on the centre itself, or so near it that its squared length
+    // underflows; there is no direction left to project along, so take the side facing the ray.
+    if (!(len > 0)) local = -ray.d, len = length(local);
+    local = local * (s.radius / len);
     hit.t = t;
     hit.p = s.center + local;
     // Error of the projected point: the scaling costs gamma(5) of |local| (pbrt-v4 eq. 6.39),

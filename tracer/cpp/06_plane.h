@@ -4,7 +4,10 @@
 
 #include <cmath>
 
+#include "01_vec3.h"
+#include "02_ray.h"
 #include "04_hit.h"
+#include "constants.h"
 
 namespace rt {
 

@@ -5,6 +5,7 @@
 
 namespace rt {
 
+// The defaults are the scene language's (the Python package tracer.scene sets every field).
 struct Material {
     Color color{1, 1, 1};
     double ambient = 0.1;      // share of the ambient light it returns

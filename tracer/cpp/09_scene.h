@@ -12,14 +12,19 @@
 #include <memory>
 #include <vector>
 
+#include "01_vec3.h"
+#include "02_ray.h"
 #include "03_camera.h"
+#include "04_hit.h"
 #include "05_sphere.h"
 #include "06_plane.h"
 #include "07_material.h"
 #include "08_light.h"
+#include "constants.h"
 
 namespace rt {
 
+// The defaults are the scene language's (the Python package tracer.scene sets every field).
 struct Settings {
     int max_depth = 5;            // the primary ray is level 1
     double min_coefficient = 0;   // a level whose chain coefficient is below this is black

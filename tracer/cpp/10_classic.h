@@ -9,10 +9,18 @@
 //     coef *= reflectivity                                       the chain, trace()
 //     redirect ray from P to d - 2 (d.N) N                       reflect(), secondary_ray()
 //   Stop when no intersection, or coef << 1, or maximum number of bounces
+//
+// The steps the tracers share (turning the normals to the ray, starting the next ray off the
+// surface) are in 04_hit.h: face_the_ray(), secondary_ray(), shadow_ray_to(),
+// shadow_ray_towards(). The packet tracer (12_packet.h) and the path tracer (20_path.h) call
+// the same functions.
 #pragma once
 
-#include <cmath>
-
+#include "01_vec3.h"
+#include "02_ray.h"
+#include "04_hit.h"
+#include "07_material.h"
+#include "08_light.h"
 #include "09_scene.h"
 #include "power.h"
 
@@ -45,26 +53,19 @@ inline Vec3 to_light(const Light &light, const Vec3 &p) {
     return normalize(light.position - p);
 }
 
-// Shadow ray: from the hit towards the light; any object strictly between blocks it. The origin
-// is moved off the surface by the hit's error bound (02_ray.h), so the surface the ray leaves
-// cannot block it. Towards a point light the direction is left unnormalised, light - origin, so
-// that the light itself sits at t = 1 and the blocking range is exactly (0, 1).
-inline Ray shadow_ray(const Hit &hit, const Vec3 &Ng, const Light &light, const Vec3 &L) {
-    Vec3 o = offset_ray_origin(hit.p, hit.p_error, Ng, L);
-    if (light.type == Light::Type::directional) return {o, L};
-    return {o, light.position - o};
+// Shadow ray (slide "Interaction between Lights and Objects"): from the hit to a point light,
+// or towards a directional light; any object strictly between blocks it. It starts off the
+// surface by the hit's error bound (04_hit.h), so the surface it leaves cannot block it.
+inline ShadowRay shadow_ray(const Hit &hit, const Vec3 &Ng, const Light &light) {
+    if (light.type == Light::Type::directional)
+        return shadow_ray_towards(hit, Ng, -light.direction);
+    return shadow_ray_to(hit, Ng, light.position);
 }
 
-inline bool in_shadow(const Scene &scene, const Ray &shadow, const Light &light,
-                      RayCounts &counts) {
-    double max_t = light.type == Light::Type::directional ? infinity : 1.0;
-    return any_hit(scene, shadow, {0, max_t}, counts);
-}
-
-// Secondary (reflected) ray: starts just off the surface on the side it leaves to (measured
-// along the geometric normal Ng, the surface's own).
-inline Ray secondary_ray(const Hit &hit, const Vec3 &Ng, const Vec3 &R) {
-    return {offset_ray_origin(hit.p, hit.p_error, Ng, R), R};
+// "Objects block light": whether anything lies on the shadow ray within its reach.
+inline bool in_shadow(const Scene &scene, const ShadowRay &shadow, RayCounts &counts) {
+    ++counts.shadow;
+    return any_hit(scene, shadow.ray, {0, shadow.max_t}, counts);
 }
 
 // The light one hit returns without its reflection: C_k of the slide's chain
@@ -76,9 +77,10 @@ inline Color local_color(const Scene &scene, const Material &m, const Hit &hit, 
     for (const Light &light : scene.lights) {
         Vec3 L = to_light(light, hit.p);
         double NL = lambert_term(N, L);
-        if (NL <= 0) continue; // the light is behind the surface
-        ++counts.shadow;
-        if (in_shadow(scene, shadow_ray(hit, Ng, light, L), light, counts)) continue;
+        // The light is behind the surface, or sits on the hit point itself, where L = 0 / 0 has
+        // no direction (NaN fails every comparison; 12_packet.h tests NL > 0 the same way).
+        if (!(NL > 0)) continue;
+        if (in_shadow(scene, shadow_ray(hit, Ng, light), counts)) continue;
         color += (m.diffuse * NL) * (m.color * light.color);
         if (m.specular != 0) color += (m.specular * phong_term(R, L, m.shininess)) * light.color;
     }
@@ -103,15 +105,12 @@ inline Color trace(const Scene &scene, Ray ray, RayCounts &counts) {
             break;
         }
         const Material &m = scene.materials[hit.material];
-        // Turn N to face the incoming ray: the side we see is the side we shade. (The shading
-        // normal N of a smooth mesh follows its geometric normal Ng to that side.)
-        Vec3 Ng = dot(hit.Ng, ray.d) > 0 ? -hit.Ng : hit.Ng;
-        Vec3 N = dot(hit.N, Ng) < 0 ? -hit.N : hit.N;
-        Vec3 R = reflect(ray.d, N);
-        color += coef * local_color(scene, m, hit, N, Ng, R, counts);
+        const Facing f = face_the_ray(hit, ray.d); // the side we see is the side we shade
+        Vec3 R = reflect(ray.d, f.N);
+        color += coef * local_color(scene, m, hit, f.N, f.Ng, R, counts);
         if (m.reflectivity == 0) break; // a feature not used costs nothing: no reflected ray
         coef *= m.reflectivity;
-        ray = secondary_ray(hit, Ng, R);
+        ray = secondary_ray(hit, f.Ng, R);
     }
     return color;
 }

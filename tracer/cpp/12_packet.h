@@ -1,42 +1,66 @@
 // Slide "Efficiency and Complexity": "Efficiency is a HUGE deal". The same classic algorithm as
-// 10_classic.h, traced for a packet of W rays at once, so that each arithmetic step runs on all
-// W rays in one SIMD instruction (GCC/Clang vector extensions; AVX-512 holds 8 doubles).
+// 10_classic.h, traced for a packet of rays_per_packet rays at once, so that each arithmetic
+// step runs on all of them in one SIMD instruction (GCC/Clang vector extensions; AVX-512 holds
+// 8 doubles).
 //
-// It serves scenes of spheres and planes (Ex 25's objects); a scene with other objects is traced
-// one ray at a time. This file adds speed, not behaviour: every step below is the step of 05_sphere.h, 06_plane.h,
-// 09_scene.h and 10_classic.h with the same operations in the same order, so each lane computes
-// bit for bit what the one-ray code computes (IEEE-754 add, mul, div and sqrt are correctly
-// rounded in vector units too, and the build forbids fused multiply-add contraction).
-// tests/tracer/test_packet.py renders every canonical scene both ways and requires equal images.
-// Where lanes disagree (one hits a sphere, the next a plane), masks choose per lane; a lane whose
-// ray has finished is masked off until the whole packet is done.
+// It serves scenes of spheres and planes only (Ex 25's objects; packets_serve() below); a scene
+// with other objects is traced one ray at a time. Those objects are reached through a virtual
+// hit() per object and ray, and boxes, meshes, cylinders and tori each test one ray in their own
+// coordinates; packets of them would need a second copy of every one of those files, and the
+// lecture's code is kept as one plain copy. This file adds speed, not behaviour: every step
+// below is the step of 05_sphere.h, 06_plane.h, 09_scene.h and 10_classic.h with the same
+// operations in the same order, and the shared steps of 04_hit.h (face_the_ray(),
+// secondary_ray(), shadow_ray_to(), shadow_ray_towards()) keep their names as overloads, so each
+// lane computes bit for bit what the one-ray code computes (IEEE-754 add, mul, div and sqrt are
+// correctly rounded in vector units too, and the build forbids fused multiply-add contraction).
+// tests/tracer/test_packet.py renders every canonical scene of spheres and planes both ways and
+// requires equal images. Where lanes disagree (one hits a sphere, the next a plane), masks choose
+// per lane; a lane whose ray has finished is masked off until the whole packet is done.
 #pragma once
 
+#include <algorithm>
+#include <cfloat>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <vector>
 
+#include "01_vec3.h"
+#include "02_ray.h"
+#include "03_camera.h"
+#include "04_hit.h"
+#include "05_sphere.h"
+#include "06_plane.h"
+#include "07_material.h"
+#include "08_light.h"
+#include "09_scene.h"
 #include "11_render.h"
+#include "constants.h"
+#include "power.h"
 
 namespace rt {
 
-// W, Lanes and Mask are declared in power.h, which both tracers share.
+// Whether the packet tracer serves this scene: spheres and planes only (see above).
+inline bool packets_serve(const Scene &scene) { return scene.objects.empty(); }
+
+// rays_per_packet, Lanes and Mask are declared in power.h, which both tracers share.
 inline Lanes splat(double v) { return Lanes{} + v; }
 inline Mask mask_all(bool v) { return Mask{} + (v ? -1 : 0); }
 inline int count(Mask m) {
     int n = 0;
-    for (int k = 0; k < W; ++k) n += m[k] != 0;
+    for (int k = 0; k < rays_per_packet; ++k) n += m[k] != 0;
     return n;
 }
 inline bool any(Mask m) {
-    for (int k = 0; k < W; ++k)
+    for (int k = 0; k < rays_per_packet; ++k)
         if (m[k]) return true;
     return false;
 }
 inline Lanes sqrt(Lanes x) {
     Lanes r;
-    for (int k = 0; k < W; ++k) r[k] = std::sqrt(x[k]); // one vsqrtpd (built -fno-math-errno)
+    // One vsqrtpd (built -fno-math-errno, so no per-lane errno check stops the vectoriser).
+    for (int k = 0; k < rays_per_packet; ++k) r[k] = std::sqrt(x[k]);
     return r;
 }
 inline Lanes fabs(Lanes x) {
@@ -126,7 +150,7 @@ inline Lanes plane_t(const Plane &pl, const RayL &ray) {
 // 09_scene.h closest_hit(): per lane the closest t and which object (kind 0 sphere, 1 plane).
 struct ClosestL {
     Lanes t;
-    int64_t kind[W], index[W];
+    int64_t kind[rays_per_packet], index[rays_per_packet];
 };
 
 inline ClosestL closest_hit(const Scene &scene, const RayL &ray, Mask active,
@@ -134,14 +158,14 @@ inline ClosestL closest_hit(const Scene &scene, const RayL &ray, Mask active,
     ClosestL c;
     counts.primitive_tests += uint64_t(count(active)) * (scene.spheres.size() + scene.planes.size());
     c.t = splat(infinity);
-    for (int k = 0; k < W; ++k) c.kind[k] = c.index[k] = -1;
+    for (int k = 0; k < rays_per_packet; ++k) c.kind[k] = c.index[k] = -1;
     const Lanes a = dot(ray.d, ray.d), inv_a = 1 / a;
     for (size_t i = 0; i < scene.spheres.size(); ++i) {
         Lanes t = sphere_t(scene.spheres[i], ray, a, inv_a, c.t, active);
         Mask closer = active & (t < c.t);
         if (!any(closer)) continue;
         c.t = select(closer, t, c.t);
-        for (int k = 0; k < W; ++k)
+        for (int k = 0; k < rays_per_packet; ++k)
             if (closer[k]) c.kind[k] = 0, c.index[k] = int64_t(i);
     }
     for (size_t i = 0; i < scene.planes.size(); ++i) {
@@ -149,7 +173,7 @@ inline ClosestL closest_hit(const Scene &scene, const RayL &ray, Mask active,
         Mask closer = active & (t > 0) & (t < c.t);
         if (!any(closer)) continue;
         c.t = select(closer, t, c.t);
-        for (int k = 0; k < W; ++k)
+        for (int k = 0; k < rays_per_packet; ++k)
             if (closer[k]) c.kind[k] = 1, c.index[k] = int64_t(i);
     }
     return c;
@@ -195,10 +219,11 @@ inline Vec3L offset_ray_origin(const Vec3L &p, const Vec3L &p_error, const Vec3L
     return {next_away(po.x, offset.x), next_away(po.y, offset.y), next_away(po.z, offset.z)};
 }
 
-// The hit record of 05_sphere.h sphere_hit() and 06_plane.h plane_hit(), per lane.
+// The hit record of 05_sphere.h sphere_hit() and 06_plane.h plane_hit(), per lane (for spheres
+// and planes the shading normal N is the geometric normal Ng).
 struct HitL {
-    Vec3L p, p_error, N;
-    int64_t material[W];
+    Vec3L p, p_error, N, Ng;
+    int64_t material[rays_per_packet];
 };
 
 inline HitL hit_record(const Scene &scene, const RayL &ray, const ClosestL &c, Mask active) {
@@ -207,7 +232,7 @@ inline HitL hit_record(const Scene &scene, const RayL &ray, const ClosestL &c, M
     Lanes radius = splat(1.0);
     Mask is_sphere = mask_all(false);
     HitL h;
-    for (int k = 0; k < W; ++k) {
+    for (int k = 0; k < rays_per_packet; ++k) {
         h.material[k] = 0;
         if (!active[k]) continue;
         if (c.kind[k] == 0) {
@@ -227,7 +252,13 @@ inline HitL hit_record(const Scene &scene, const RayL &ray, const ClosestL &c, M
     const bool spheres = any(active & is_sphere), planes = any(active & ~is_sphere);
     if (spheres) { // project onto the sphere
         Vec3L local = at - centre;
-        local = local * (radius / sqrt(dot(local, local)));
+        Lanes len = sqrt(dot(local, local));
+        const Mask degenerate = active & is_sphere & ~(len > 0); // as sphere_hit()
+        if (any(degenerate)) {
+            local = select(degenerate, -ray.d, local);
+            len = select(degenerate, sqrt(dot(local, local)), len);
+        }
+        local = local * (radius / len);
         h.p = centre + local;
         h.p_error = (abs(centre) + abs(local)) * splat(gamma(7));
         h.N = local / radius;
@@ -244,7 +275,56 @@ inline HitL hit_record(const Scene &scene, const RayL &ray, const ClosestL &c, M
             h.N = select(is_sphere, h.N, normal);
         }
     }
+    h.Ng = h.N;
     return h;
+}
+
+// 04_hit.h face_the_ray(), per lane.
+struct FacingL {
+    Vec3L N, Ng;
+};
+inline FacingL face_the_ray(const HitL &hit, const Vec3L &d) {
+    Vec3L Ng = select(dot(hit.Ng, d) > 0, -hit.Ng, hit.Ng);
+    Vec3L N = select(dot(hit.N, Ng) < 0, -hit.N, hit.N);
+    return {N, Ng};
+}
+
+// 10_classic.h reflect(), per lane.
+inline Vec3L reflect(const Vec3L &d, const Vec3L &N) { return d - N * (2 * dot(d, N)); }
+
+// 04_hit.h secondary_ray(), shadow_ray_to() and shadow_ray_towards(), and 10_classic.h
+// shadow_ray() and in_shadow(), per lane.
+inline RayL secondary_ray(const HitL &hit, const Vec3L &Ng, const Vec3L &direction) {
+    return {offset_ray_origin(hit.p, hit.p_error, Ng, direction), direction};
+}
+
+struct ShadowRayL {
+    RayL ray;
+    double max_t; // the same reach for every lane: they go to the same light
+};
+
+inline ShadowRayL shadow_ray_to(const HitL &hit, const Vec3L &Ng, const Vec3 &point) {
+    const Vec3L to = splat(point);
+    Vec3L o = offset_ray_origin(hit.p, hit.p_error, Ng, to - hit.p);
+    return {{o, to - o}, 1.0};
+}
+
+inline ShadowRayL shadow_ray_towards(const HitL &hit, const Vec3L &Ng, const Vec3 &direction) {
+    const Vec3L d = splat(direction);
+    return {{offset_ray_origin(hit.p, hit.p_error, Ng, d), d}, infinity};
+}
+
+inline ShadowRayL shadow_ray(const HitL &hit, const Vec3L &Ng, const Light &light) {
+    if (light.type == Light::Type::directional)
+        return shadow_ray_towards(hit, Ng, -light.direction);
+    return shadow_ray_to(hit, Ng, light.position);
+}
+
+// The lanes of `active` whose shadow ray is blocked.
+inline Mask in_shadow(const Scene &scene, const ShadowRayL &shadow, Mask active,
+                      RayCounts &counts) {
+    counts.shadow += uint64_t(count(active));
+    return any_hit(scene, shadow.ray, splat(shadow.max_t), active, counts);
 }
 
 // One turn of the loop of 10_classic.h trace(), for the rays of `active`: find the closest hit,
@@ -266,7 +346,7 @@ inline Mask trace_level(const Scene &scene, RayL &ray, Mask active, Lanes &coef,
     int first = 0;
     while (!active[first]) ++first;
     bool shared = true;
-    for (int k = first + 1; k < W; ++k)
+    for (int k = first + 1; k < rays_per_packet; ++k)
         shared &= !active[k] || hit.material[k] == hit.material[first];
     if (shared) {
         const Material &m = scene.materials[size_t(hit.material[first])];
@@ -274,15 +354,16 @@ inline Mask trace_level(const Scene &scene, RayL &ray, Mask active, Lanes &coef,
         ambient = splat(m.ambient), diffuse = splat(m.diffuse), specular = splat(m.specular);
         shininess = splat(m.shininess), reflectivity = splat(m.reflectivity);
     } else {
-        for (int k = 0; k < W; ++k) {
+        for (int k = 0; k < rays_per_packet; ++k) {
             const Material &m = scene.materials[size_t(hit.material[k])];
             m_color.r[k] = m.color.r, m_color.g[k] = m.color.g, m_color.b[k] = m.color.b;
             ambient[k] = m.ambient, diffuse[k] = m.diffuse, specular[k] = m.specular;
             shininess[k] = m.shininess, reflectivity[k] = m.reflectivity;
         }
     }
-    Vec3L N = select(dot(hit.N, ray.d) > 0, -hit.N, hit.N);
-    Vec3L R = ray.d - N * (2 * dot(ray.d, N));
+    const FacingL f = face_the_ray(hit, ray.d); // the side we see is the side we shade
+    const Vec3L &N = f.N;
+    Vec3L R = reflect(ray.d, N);
 
     // local_color()
     ColorL local = m_color * (splat(s.ambient_light) * ambient);
@@ -295,12 +376,7 @@ inline Mask trace_level(const Scene &scene, RayL &ray, Mask active, Lanes &coef,
         Lanes NL = dot(N, L);
         Mask lit = shaded & (NL > 0);
         if (!any(lit)) continue;
-        counts.shadow += uint64_t(count(lit));
-        RayL shadow;
-        shadow.o = offset_ray_origin(hit.p, hit.p_error, N, L);
-        shadow.d = light.type == Light::Type::directional ? L : splat(light.position) - shadow.o;
-        double max_t = light.type == Light::Type::directional ? infinity : 1.0;
-        lit &= ~any_hit(scene, shadow, splat(max_t), lit, counts);
+        lit &= ~in_shadow(scene, shadow_ray(hit, f.Ng, light), lit, counts);
         if (!any(lit)) continue;
         const ColorL lc = splat(light.color);
         add_where(lit, local, (m_color * lc) * (diffuse * NL));
@@ -314,8 +390,7 @@ inline Mask trace_level(const Scene &scene, RayL &ray, Mask active, Lanes &coef,
     add_where(active, color, local * coef);
     active &= reflectivity != 0;
     coef *= reflectivity;
-    ray.o = offset_ray_origin(hit.p, hit.p_error, N, R);
-    ray.d = R;
+    ray = secondary_ray(hit, f.Ng, R);
     return active;
 }
 
@@ -339,10 +414,11 @@ inline ColorL trace(const Scene &scene, RayL ray, Mask active, RayCounts &counts
     return color;
 }
 
-// 03_camera.h primary_ray() through the centres of pixels i0 .. i0 + W - 1 of row j.
+// 03_camera.h primary_ray() through the centres of pixels i0, i0 + 1, ... (one per lane) of
+// row j.
 inline RayL primary_rays(const Camera &cam, int i0, int j) {
     Lanes sx;
-    for (int k = 0; k < W; ++k) sx[k] = (i0 + k) + 0.5;
+    for (int k = 0; k < rays_per_packet; ++k) sx[k] = (i0 + k) + 0.5;
     Lanes x = sx / double(cam.width) - 0.5;
     double y = 0.5 - (j + 0.5) / cam.height;
     Vec3L d = splat(cam.forward) + splat(cam.right) * (x * cam.plane_width) +
@@ -356,15 +432,15 @@ inline void store_pixels(float *out, int width, int i0, int j, int n, const Colo
         px[0] = float(c.r[k]), px[1] = float(c.g[k]), px[2] = float(c.b[k]);
 }
 
-// A tile of pixels, traced W rays at a time: the rays of 11_render.h for_each_sample(), in the
-// same order, so each pixel's sum adds the same colours in the same order.
+// A tile of pixels, traced a packet at a time: the rays of 11_render.h for_each_sample(), in
+// the same order, so each pixel's sum adds the same colours in the same order.
 inline void render_tile_packets(const Scene &scene, int x0, int y0, int x1, int y1, float *out,
                                 RayCounts &counts) {
     const Camera &cam = scene.camera;
     if (scene.settings.spp == 1) { // one ray per pixel: whole packets along each row
         for (int j = y0; j < y1; ++j)
-            for (int i = x0; i < x1; i += W) {
-                const int n = std::min(W, x1 - i);
+            for (int i = x0; i < x1; i += rays_per_packet) {
+                const int n = std::min(rays_per_packet, x1 - i);
                 Mask active = mask_all(false);
                 for (int k = 0; k < n; ++k) active[k] = -1;
                 counts.primary += uint64_t(n);
@@ -376,10 +452,10 @@ inline void render_tile_packets(const Scene &scene, int x0, int y0, int x1, int 
     const int tile_w = x1 - x0;
     std::vector<Color> sums(size_t(tile_w) * size_t(y1 - y0));
     RayL packet;
-    int pixel[W], n = 0;
+    int pixel[rays_per_packet], n = 0;
     auto flush = [&] {
         Mask active = mask_all(false);
-        for (int k = 0; k < W; ++k) {
+        for (int k = 0; k < rays_per_packet; ++k) {
             active[k] = k < n ? -1 : 0;
             if (k >= n) // idle lanes: any harmless ray, masked off
                 packet.o.x[k] = packet.o.y[k] = packet.o.z[k] = 0,
@@ -391,13 +467,13 @@ inline void render_tile_packets(const Scene &scene, int x0, int y0, int x1, int 
     };
     for (int j = y0; j < y1; ++j)
         for (int i = x0; i < x1; ++i)
-            for_each_sample(scene, i, j, [&](double sx, double sy) {
+            for_each_sample(scene, i, j, [&](double sx, double sy, Rng &) {
                 Ray r = cam.primary_ray(sx, sy);
                 ++counts.primary;
                 packet.o.x[n] = r.o.x, packet.o.y[n] = r.o.y, packet.o.z[n] = r.o.z;
                 packet.d.x[n] = r.d.x, packet.d.y[n] = r.d.y, packet.d.z[n] = r.d.z;
                 pixel[n] = (j - y0) * tile_w + (i - x0);
-                if (++n == W) flush();
+                if (++n == rays_per_packet) flush();
             });
     if (n > 0) flush();
     for (int j = y0; j < y1; ++j)

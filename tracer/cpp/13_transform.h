@@ -9,6 +9,8 @@
 
 #include <cmath>
 
+#include "01_vec3.h"
+#include "02_ray.h"
 #include "04_hit.h"
 
 namespace rt {

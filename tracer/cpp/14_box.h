@@ -3,16 +3,19 @@
 // the intersection of three slabs min.x <= x <= max.x, ...; the ray is inside the box for the
 // t where it is inside all three, the overlap of three intervals.
 //
-// The same test bounds the triangles of a mesh (15_mesh.h). For that use it must never miss a
+// The same test bounds the triangles of a mesh (16_mesh.h). For that use it must never miss a
 // box the ray touches: computed t values carry rounding error, so the far end of the overlap is
 // widened by 1 + 2 gamma(3) (pbrt-v4 6.8.2, "Robust Bounding Box Intersection").
 #pragma once
 
 #include <algorithm>
-#include <cmath>
 #include <utility>
 
+#include "01_vec3.h"
+#include "02_ray.h"
+#include "04_hit.h"
 #include "13_transform.h"
+#include "constants.h"
 
 namespace rt {
 

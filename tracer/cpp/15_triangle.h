@@ -13,7 +13,9 @@
 
 #include <cmath>
 
-#include "14_box.h"
+#include "01_vec3.h"
+#include "02_ray.h"
+#include "04_hit.h"
 
 namespace rt {
 

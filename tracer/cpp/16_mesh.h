@@ -10,10 +10,16 @@
 
 #include <algorithm>
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
+#include "01_vec3.h"
+#include "02_ray.h"
+#include "04_hit.h"
+#include "14_box.h"
 #include "15_triangle.h"
+#include "constants.h"
 
 namespace rt {
 
@@ -26,6 +32,11 @@ struct BVHNode {
 };
 
 struct Mesh : Object {
+    // The deepest a leaf may lie. The traversal keeps at most one waiting node per level on its
+    // stack, so a stack of max_tree_depth + 1 entries cannot overflow; 60 levels of a tree that
+    // halves its triangles at each level would hold 2^60 of them, more than any mesh here.
+    static constexpr int max_tree_depth = 60;
+
     std::vector<Vec3> vertices;
     std::vector<Vec3> normals; // per vertex, for smooth (Gouraud-style) shading; empty: flat
     std::vector<std::array<int, 3>> triangles;
@@ -82,8 +93,10 @@ struct Mesh : Object {
             centre_bounds.extend(centres[size_t(order[size_t(i)])]);
         }
         nodes[size_t(index)].bounds = bounds;
-        // max_depth keeps the traversal stack (64 entries) from overflowing on any input.
-        constexpr int bins = 16, max_leaf = 4, max_depth = 60;
+        // 16 bins find a split within a few per cent of the best of all (Wald 2007) at a
+        // fraction of the cost; leaves of at most 4 triangles, as pbrt-v4's default; a depth of
+        // at most max_tree_depth keeps the traversal stack from overflowing on any input.
+        constexpr int bins = 16, max_leaf = 4, max_depth = max_tree_depth;
         double best_cost = infinity;
         int best_axis = -1, best_bin = 0;
         if (count > max_leaf && depth < max_depth) {
@@ -162,7 +175,7 @@ struct Mesh : Object {
         struct Pending {
             int node;
             double t_near;
-        } stack[64];
+        } stack[max_tree_depth + 1];
         int top = 0, index = 0;
         bool found = false;
         for (;;) {

@@ -4,9 +4,13 @@
 #pragma once
 
 #include <cmath>
-#include <utility>
+#include <initializer_list>
 
-#include "16_mesh.h"
+#include "01_vec3.h"
+#include "02_ray.h"
+#include "04_hit.h"
+#include "13_transform.h"
+#include "constants.h"
 
 namespace rt {
 
@@ -61,7 +65,11 @@ struct Cylinder : Object {
         Vec3 p = ray.at(t);
         Vec3 e = gamma(5) * (abs(ray.o) + abs(t * ray.d));
         if (N.z == 0) { // on the side: move (x, y) onto the circle, as the sphere's point
-            double s = radius / std::sqrt(p.x * p.x + p.y * p.y);
+            double rho = std::sqrt(p.x * p.x + p.y * p.y);
+            // A radius below the spacing of doubles on the axis: no direction left (as in
+            // 05_sphere.h sphere_hit()); the side facing the ray (d.xy != 0 on a side hit).
+            if (!(rho > 0)) p.x = -ray.d.x, p.y = -ray.d.y, rho = std::sqrt(p.x * p.x + p.y * p.y);
+            double s = radius / rho;
             p.x *= s, p.y *= s;
             e.x = gamma(5) * std::fabs(p.x), e.y = gamma(5) * std::fabs(p.y);
             N = {p.x / radius, p.y / radius, 0};

@@ -11,11 +11,14 @@
 // but it cannot miss a root that changes sign, nor report one that does not exist.
 #pragma once
 
-#include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <vector>
 
-#include "17_cylinder.h"
+#include "01_vec3.h"
+#include "02_ray.h"
+#include "04_hit.h"
+#include "13_transform.h"
 
 namespace rt {
 
@@ -26,7 +29,11 @@ inline double polynomial(const double *c, int n, double x) {
     return v;
 }
 
-// The root of p in [lo, hi] where p(lo) and p(hi) differ in sign, to the last bit.
+// The root of p in [lo, hi] where p(lo) and p(hi) differ in sign, to the last bit. Each step
+// halves the interval, and a double interval of one sign shrinks to adjacent doubles in at most
+// 64 halvings once it is narrower than its magnitude (more while it straddles zero or starts
+// wide): 200 steps is a cap that a working bisection never reaches, there against a loop that
+// would never end.
 inline double bisect(const double *c, int n, double lo, double hi) {
     double f_lo = polynomial(c, n, lo);
     for (int i = 0; i < 200; ++i) {
@@ -93,6 +100,8 @@ struct Torus : Object {
                        2 * A - 4 * R * R * uu, 0, 1};
         double half = std::sqrt(reach * reach - o2); // the chord inside the bounding sphere
         std::vector<double> roots;
+        // The chord, widened a little (relatively by 1e-9, far above its rounding error; and by
+        // 1e-300 so that a zero chord, a ray grazing the bounding sphere, is an interval).
         real_roots(c, 4, -half * (1 + 1e-9) - 1e-300, half * (1 + 1e-9) + 1e-300, roots);
         const double abs_c[5] = {std::fabs(c[0]), std::fabs(c[1]), std::fabs(c[2]), 0, 1};
         const double dc[4] = {c[1], 2 * c[2], 0, 4};
@@ -108,7 +117,11 @@ struct Torus : Object {
             Vec3 p = o + s * u;
             double rho = std::sqrt(p.x * p.x + p.y * p.y);
             Vec3 ring = rho > 0 ? Vec3{R * p.x / rho, R * p.y / rho, 0} : Vec3{R, 0, 0};
-            Vec3 N = normalize(p - ring);
+            // normalize(p - ring); for a tube thinner than the spacing of doubles on the ring
+            // there is no direction left (as in 05_sphere.h sphere_hit()): face the ray.
+            Vec3 v = p - ring;
+            double len = length(v);
+            Vec3 N = len > 0 ? v / len : -u;
             p = ring + r * N;
             transform.place(*this, t, p, gamma(8) * (abs(ring) + abs(r * N)), N, hit);
             return true;

@@ -5,8 +5,15 @@
 // `aov` integrator can check without any shading model.
 #pragma once
 
+#include <algorithm>
+#include <cfloat>
+#include <cstddef>
+
+#include "02_ray.h"
+#include "03_camera.h"
+#include "04_hit.h"
 #include "09_scene.h"
-#include "18_torus.h"
+#include "constants.h"
 
 namespace rt {
 
@@ -22,7 +29,9 @@ inline void render_tile_aov(const Scene &scene, int x0, int y0, int x1, int y1, 
             Hit hit = closest_hit(scene, ray, counts);
             float *px = out + (size_t(j) * cam.width + i) * aov_channels;
             bool found = hit.found();
-            px[0] = found ? float(hit.t) : float(infinity);
+            // A hit farther than float32 can say (3.4e38, a ray grazing a plane) keeps the
+            // largest float: infinity means a miss, and only a miss.
+            px[0] = found ? float(std::min(hit.t, double(FLT_MAX))) : float(infinity);
             px[1] = float(hit.object);
             px[2] = found ? float(hit.N.x) : 0.0f;
             px[3] = found ? float(hit.N.y) : 0.0f;

@@ -16,18 +16,32 @@
 // (the power heuristic, Veach and Guibas 1995) so neither strategy counts them twice. Russian
 // roulette ends long paths without bias. max_depth counts as Mitsuba counts: 1 sees emitters
 // directly, 2 adds direct lighting, and so on (the primary ray is level 1, as in the classic
-// model).
+// model). The steps shared with the classic tracer keep its names: face_the_ray(),
+// secondary_ray(), shadow_ray() and in_shadow() (04_hit.h, 10_classic.h), and each sample's
+// random numbers come from pixel_rng() (11_render.h).
 #pragma once
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
 #include <vector>
 
-#include "19_aov.h"
+#include "01_vec3.h"
+#include "02_ray.h"
+#include "03_camera.h"
+#include "04_hit.h"
+#include "05_sphere.h"
+#include "06_plane.h"
+#include "07_material.h"
+#include "08_light.h"
+#include "09_scene.h"
+#include "10_classic.h"
+#include "11_render.h"
+#include "16_mesh.h"
+#include "constants.h"
 
 namespace rt {
-
-constexpr double pi = 3.14159265358979323846;
 
 // An orthonormal basis around a unit normal (Duff et al., "Building an Orthonormal Basis,
 // Revisited", JCGT 2017): no branch on which axis to cross with.
@@ -95,7 +109,7 @@ struct BSDF {
         }
         return f;
     }
-    // The solid-angle density of sample() choosing wi, for the non-delta lobes.
+    // The solid-angle density of sample_bsdf() choosing wi, for the non-delta lobes.
     double pdf(const Vec3 &wo, const Vec3 &wi) const {
         double cos_i = dot(wi, N);
         if (cos_i <= 0 || dot(wo, N) <= 0) return 0;
@@ -123,8 +137,9 @@ inline bool sample_bsdf(const BSDF &b, const Vec3 &wo, double u0, double u1, dou
         out = {mirror, Color{1, 1, 1} * (b.reflectivity / b.p_mirror), 0, true};
         return true;
     }
-    Vec3 wi = u0 < b.p_mirror + b.p_glossy ? Frame(mirror).to_world(sample_phong_lobe(u1, u2, b.shininess))
-                                            : Frame(b.N).to_world(sample_cosine(u1, u2));
+    Vec3 wi = u0 < b.p_mirror + b.p_glossy
+                  ? Frame(mirror).to_world(sample_phong_lobe(u1, u2, b.shininess))
+                  : Frame(b.N).to_world(sample_cosine(u1, u2));
     double p = b.pdf(wo, wi);
     if (p <= 0) return false;
     Color f = b.eval(wo, wi);
@@ -135,7 +150,15 @@ inline bool sample_bsdf(const BSDF &b, const Vec3 &wo, double u0, double u1, dou
 // Multiple importance sampling, the power heuristic (Veach 1997, eq. 9.13).
 inline double power_heuristic(double f, double g) {
     double f2 = f * f, g2 = g * g;
-    return f2 + g2 > 0 ? f2 / (f2 + g2) : 0;
+    if (f2 + g2 < infinity) return f2 + g2 > 0 ? f2 / (f2 + g2) : 0;
+    // A density whose square overflows (a light of area 1e-150 seen edge on): the same weight,
+    // from the ratio of the two, where inf / inf would give NaN.
+    if (f >= g) {
+        double r = g / f;
+        return 1 / (1 + r * r);
+    }
+    double r = f / g;
+    return r * r / (1 + r * r);
 }
 
 // Emitting objects that next-event estimation can sample a point on: spheres and triangle
@@ -224,11 +247,16 @@ struct PathContext {
             l.area = acc;
             l.emission = m.emission;
             l.object = o->object;
-            if (acc > 0) add(l);
+            add(l);
         }
         n_sampled = int(area_lights.size()) + (environment ? 1 : 0);
     }
+    // A light whose area is 0 (a sphere of radius 1e-300), below 1e-308 (so that 1 / area
+    // overflows) or infinite (radius 1e200) has no finite density 1 / area to sample its
+    // points by; it still emits when a path hits it, with the scattered ray as the only
+    // strategy (as planes and boxes do).
     void add(const AreaLight &l) {
+        if (!(l.area < infinity && 1 / l.area < infinity)) return;
         area_light_of_object[size_t(l.object)] = int(area_lights.size());
         area_lights.push_back(l);
     }
@@ -242,20 +270,8 @@ struct PathContext {
     }
 };
 
-// Is the segment from the hit (leaving along Ng's side toward `to`) to `target` blocked?
-inline bool occluded(const Scene &scene, const Hit &hit, const Vec3 &Ng, const Vec3 &target,
-                     RayCounts &counts) {
-    Vec3 o = offset_ray_origin(hit.p, hit.p_error, Ng, target - hit.p);
-    ++counts.shadow;
-    return any_hit(scene, {o, target - o}, {0, 1}, counts);
-}
-
-inline bool occluded_towards(const Scene &scene, const Hit &hit, const Vec3 &Ng, const Vec3 &wi,
-                             RayCounts &counts) {
-    Vec3 o = offset_ray_origin(hit.p, hit.p_error, Ng, wi);
-    ++counts.shadow;
-    return any_hit(scene, {o, wi}, {0, infinity}, counts);
-}
+constexpr int roulette_from_level = 5;         // Mitsuba's rr_depth
+constexpr double roulette_max_survival = 0.95; // Mitsuba's cap on the survival chance
 
 // One path from the camera: the radiance it carries back along `ray`.
 inline Color trace_path(const PathContext &ctx, Ray ray, Rng &rng, RayCounts &counts) {
@@ -269,16 +285,18 @@ inline Color trace_path(const PathContext &ctx, Ray ray, Rng &rng, RayCounts &co
         Hit hit = closest_hit(scene, ray, counts);
         if (!hit.found()) { // the environment
             if (ctx.environment) {
-                double w = prev_delta ? 1 : power_heuristic(prev_pdf, (1.0 / ctx.n_sampled) / (4 * pi));
+                double w = prev_delta
+                               ? 1
+                               : power_heuristic(prev_pdf, (1.0 / ctx.n_sampled) / (4 * pi));
                 L += beta * s.background * w;
             }
             break;
         }
         const Material &m = scene.materials[size_t(hit.material)];
         Vec3 wo = -ray.d;
-        bool front = dot(hit.Ng, wo) > 0;
-        Vec3 Ng = front ? hit.Ng : -hit.Ng;
-        Vec3 N = dot(hit.N, Ng) < 0 ? -hit.N : hit.N;
+        const Facing f = face_the_ray(hit, ray.d);
+        const Vec3 &N = f.N, &Ng = f.Ng;
+        bool front = dot(hit.Ng, ray.d) < 0; // the ray meets the surface's own front side
         if (front && !is_black(m.emission)) { // emission leaves the front side only
             double w = 1;
             int light = ctx.area_light_of_object[size_t(hit.object)];
@@ -305,11 +323,10 @@ inline Color trace_path(const PathContext &ctx, Ray ray, Rng &rng, RayCounts &co
                     Li = light.color; // irradiance
                 }
                 double cos_i = dot(wi, N);
-                if (cos_i <= 0 || dot(wi, Ng) <= 0) continue;
-                bool blocked = light.type == Light::Type::point
-                                   ? occluded(scene, hit, Ng, light.position, counts)
-                                   : occluded_towards(scene, hit, Ng, wi, counts);
-                if (!blocked) L += beta * bsdf.eval(wo, wi) * Li * cos_i;
+                // Behind the surface, or a point light on the hit point itself (wi = 0 / 0).
+                if (!(cos_i > 0 && dot(wi, Ng) > 0)) continue;
+                if (!in_shadow(scene, shadow_ray(hit, Ng, light), counts))
+                    L += beta * bsdf.eval(wo, wi) * Li * cos_i;
             }
             if (ctx.n_sampled > 0) {
                 int k = std::min(int(rng.uniform() * ctx.n_sampled), ctx.n_sampled - 1);
@@ -323,8 +340,11 @@ inline Color trace_path(const PathContext &ctx, Ray ray, Rng &rng, RayCounts &co
                     double cos_l = -dot(lp.Ng, wi), cos_i = dot(wi, N);
                     if (cos_l > 0 && cos_i > 0 && dot(wi, Ng) > 0) {
                         double pdf_l = (1.0 / ctx.n_sampled) * lp.pdf_area * d2 / cos_l;
+                        // The light's point, moved off the light's own surface towards the hit
+                        // (pbrt-v4 SpawnRayTo between two surfaces), so the light cannot block
+                        // the ray that reaches it.
                         Vec3 target = offset_ray_origin(lp.p, lp.p_error, lp.Ng, -wi);
-                        if (!occluded(scene, hit, Ng, target, counts)) {
+                        if (!in_shadow(scene, shadow_ray_to(hit, Ng, target), counts)) {
                             double w = power_heuristic(pdf_l, bsdf.pdf(wo, wi));
                             L += beta * bsdf.eval(wo, wi) * al.emission * (cos_i * w / pdf_l);
                         }
@@ -333,7 +353,7 @@ inline Color trace_path(const PathContext &ctx, Ray ray, Rng &rng, RayCounts &co
                     Vec3 wi = sample_sphere(u1, u2);
                     double cos_i = dot(wi, N);
                     if (cos_i > 0 && dot(wi, Ng) > 0 &&
-                        !occluded_towards(scene, hit, Ng, wi, counts)) {
+                        !in_shadow(scene, shadow_ray_towards(hit, Ng, wi), counts)) {
                         double pdf_l = (1.0 / ctx.n_sampled) / (4 * pi);
                         double w = power_heuristic(pdf_l, bsdf.pdf(wo, wi));
                         L += beta * bsdf.eval(wo, wi) * s.background * (cos_i * w / pdf_l);
@@ -349,10 +369,12 @@ inline Color trace_path(const PathContext &ctx, Ray ray, Rng &rng, RayCounts &co
         if (dot(bs.wi, Ng) <= 0) break; // a smooth normal sent it into the surface
         beta = beta * bs.weight;
         prev_delta = bs.delta, prev_pdf = bs.pdf, prev_x = hit.p;
-        // Russian roulette (as Mitsuba, from the fifth bounce): survive with probability q and
-        // carry 1/q more, so the expectation is unchanged.
-        if (level >= 5) {
-            double q = std::min(max_component(beta), 0.95);
+        // Russian roulette (as Mitsuba: rr_depth 5, and a survival chance of at most 0.95):
+        // survive with probability q and carry 1/q more, so the expectation is unchanged. The
+        // first bounces always survive (they carry most of the light); the cap keeps even a
+        // bright path's chance of ending above 5 %, so no path runs on for ever.
+        if (level >= roulette_from_level) {
+            double q = std::min(max_component(beta), roulette_max_survival);
             if (!(rng.uniform() < q)) break;
             beta = beta * (1 / q);
         }
@@ -363,7 +385,7 @@ inline Color trace_path(const PathContext &ctx, Ray ray, Rng &rng, RayCounts &co
 }
 
 // A tile of pixels: spp paths per pixel through the strata of for_each_sample(), each path
-// with its own random numbers (seeded by scene seed, pixel and sample), box-filtered.
+// drawing on its sample's own random stream (pixel_rng()), box-filtered.
 inline void render_tile_path(const PathContext &ctx, int x0, int y0, int x1, int y1, float *out,
                              RayCounts &counts) {
     const Scene &scene = ctx.scene;
@@ -371,11 +393,7 @@ inline void render_tile_path(const PathContext &ctx, int x0, int y0, int x1, int
     for (int j = y0; j < y1; ++j)
         for (int i = x0; i < x1; ++i) {
             Color sum{0, 0, 0};
-            uint64_t pixel = uint64_t(j) * uint64_t(cam.width) + uint64_t(i);
-            uint64_t k = 0;
-            for_each_sample(scene, i, j, [&](double sx, double sy) {
-                Rng rng(Rng(scene.settings.seed * 0x2545f4914f6cdd1dull + 0x1234567ull).next() ^
-                        Rng(pixel * 0x9e3779b97f4a7c15ull + k++).next());
+            for_each_sample(scene, i, j, [&](double sx, double sy, Rng &rng) {
                 ++counts.primary;
                 sum += trace_path(ctx, cam.primary_ray(sx, sy), rng, counts);
             });

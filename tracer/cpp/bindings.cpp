@@ -1,5 +1,6 @@
-// tracer._core: the C++ core as a Python extension (nanobind). The Python side (tracer/scene.py)
-// validates the scene file and fills a core Scene through these calls; nothing here parses TOML.
+// tracer._core: the C++ core as a Python extension (nanobind). The Python side (tracer/render.py
+// to_core()) fills a core Scene from the validated scene model through these calls; nothing here
+// parses TOML.
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/array.h>
@@ -9,14 +10,32 @@
 #include <nanobind/stl/vector.h>
 
 #include <array>
+#include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <tuple>
 
+#include "01_vec3.h"
+#include "02_ray.h"
+#include "04_hit.h"
+#include "05_sphere.h"
+#include "08_light.h"
+#include "09_scene.h"
+#include "10_classic.h"
+#include "11_render.h"
 #include "12_packet.h"
+#include "13_transform.h"
+#include "14_box.h"
+#include "16_mesh.h"
+#include "17_cylinder.h"
+#include "18_torus.h"
+#include "19_aov.h"
 #include "20_path.h"
+#include "constants.h"
+#include "power.h"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -71,15 +90,26 @@ static rt::Transform transform_from(const std::optional<Matrix34> &m) {
     return rt::Transform::from_matrix(a);
 }
 
-// Render with the GIL released. Every 100 ms the watching thread takes the GIL to check for
-// Ctrl-C and to report progress; an exception from either cancels the render and is re-raised.
-static std::tuple<Image, nb::dict> render(const rt::Scene &scene, int threads,
-                                          nb::object progress, bool packets, bool aov,
-                                          bool path) {
-    const int W = scene.camera.width, H = scene.camera.height;
-    const size_t channels = aov ? rt::aov_channels : 3;
+// What a render traces (Suffern's tracers, chosen per scene): the classic model one ray at a
+// time (10_classic.h, the lecture's code as written) or a packet of rays at a time
+// (12_packet.h; the same image), the arbitrary output variables (19_aov.h), or paths
+// (20_path.h).
+enum class Integrator { classic, classic_packets, aov, path };
+
+// Render with the GIL released. Every poll interval (11_render.h) the watching thread takes the
+// GIL to check for Ctrl-C and to report progress; an exception from either cancels the render
+// and is re-raised. Returns the image, the ray counts and the integrator that ran: packets
+// asked of a scene they do not serve (packets_serve(), 12_packet.h) fall back to one ray at a
+// time, and the caller learns so.
+static std::tuple<Image, nb::dict, Integrator> render(const rt::Scene &scene, int threads,
+                                                      nb::object progress,
+                                                      Integrator integrator) {
+    if (integrator == Integrator::classic_packets && !rt::packets_serve(scene))
+        integrator = Integrator::classic;
+    const int width = scene.camera.width, height = scene.camera.height;
+    const size_t channels = integrator == Integrator::aov ? rt::aov_channels : 3;
     // Not zeroed: every pixel is written (a cancelled render raises instead of returning).
-    float *data = new float[size_t(W) * H * channels];
+    float *data = new float[size_t(width) * size_t(height) * channels];
     nb::capsule owner(data, [](void *p) noexcept { delete[] static_cast<float *>(p); });
     bool failed = false;
     rt::RenderResult result;
@@ -102,23 +132,26 @@ static std::tuple<Image, nb::dict> render(const rt::Scene &scene, int threads,
             }
             return true;
         };
-        // Packets serve scenes of spheres and planes only (12_packet.h).
-        bool use_packets = packets && scene.objects.empty();
-        rt::TileRenderer tiles = aov           ? rt::render_tile_aov
-                                 : use_packets ? rt::render_tile_packets
-                                               : rt::render_tile_rays;
         std::unique_ptr<rt::PathContext> context;
-        if (path) {
+        rt::TileRenderer tiles;
+        switch (integrator) {
+        case Integrator::classic: tiles = rt::render_tile_rays; break;
+        case Integrator::classic_packets: tiles = rt::render_tile_packets; break;
+        case Integrator::aov: tiles = rt::render_tile_aov; break;
+        case Integrator::path:
             context = std::make_unique<rt::PathContext>(scene);
             tiles = [&](const rt::Scene &, int x0, int y0, int x1, int y1, float *out,
-                        rt::RayCounts &c) { rt::render_tile_path(*context, x0, y0, x1, y1, out, c); };
+                        rt::RayCounts &c) {
+                rt::render_tile_path(*context, x0, y0, x1, y1, out, c);
+            };
+            break;
         }
         result = rt::render(scene, threads, data, poll, tiles);
     }
     if (failed) throw nb::python_error();
     if (!progress.is_none()) progress(1, 1);
-    Image image(data, {size_t(H), size_t(W), channels}, owner);
-    return {image, counts_dict(result.counts)};
+    Image image(data, {size_t(height), size_t(width), channels}, owner);
+    return {image, counts_dict(result.counts), integrator};
 }
 
 NB_MODULE(_core, m) {
@@ -263,9 +296,10 @@ NB_MODULE(_core, m) {
                     mesh->triangle_object.assign(objects->data(), objects->data() + nf);
                     mesh->triangle_material.assign(materials->data(), materials->data() + nf);
                 }
-                mesh->acceleration = acceleration == "none"           ? rt::Acceleration::none
-                                     : acceleration == "bounding_box" ? rt::Acceleration::bounding_box
-                                                                      : rt::Acceleration::bvh;
+                mesh->acceleration = acceleration == "none" ? rt::Acceleration::none
+                                     : acceleration == "bounding_box"
+                                         ? rt::Acceleration::bounding_box
+                                         : rt::Acceleration::bvh;
                 {
                     nb::gil_scoped_release release;
                     mesh->build();
@@ -303,11 +337,25 @@ NB_MODULE(_core, m) {
             },
             "origin"_a, "direction"_a, "The classic colour seen along one ray.");
 
+    nb::enum_<Integrator>(m, "Integrator", "What a render traces.")
+        .value("classic", Integrator::classic, "the classic model, one ray at a time")
+        .value("classic_packets", Integrator::classic_packets,
+               "the classic model, a packet of rays at a time where the scene allows (spheres "
+               "and planes only), else one ray at a time; the same image")
+        .value("aov", Integrator::aov, "depth, object index and normal of the primary hits")
+        .value("path", Integrator::path, "Monte Carlo path tracing");
+
     m.def("render", &render, "scene"_a, "threads"_a, "progress"_a = nb::none(),
-          "packets"_a = true, "aov"_a = false, "path"_a = false,
-          "Render to a float32 (height, width, 3) array; also returns the ray counts. "
-          "packets=False traces one ray at a time (10_classic.h) instead of W at a time "
-          "(12_packet.h); the images are the same.");
+          "integrator"_a = Integrator::classic_packets,
+          "Render to a float32 (height, width, channels) array: 3 channels, or 5 for aov. "
+          "Returns (image, ray counts, the integrator that ran).");
+    // Whether this build checks memory and undefined behaviour (CMake's RTLAB_SANITIZE; `make
+    // sanitize` checks it is testing such a build).
+#if defined(__SANITIZE_ADDRESS__)
+    m.attr("sanitized") = true;
+#else
+    m.attr("sanitized") = false;
+#endif
 
     m.def(
         "intersect_sphere",

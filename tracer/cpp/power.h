@@ -20,10 +20,13 @@
 
 namespace rt {
 
-constexpr int W = 8; // rays per packet (12_packet.h)
+// Rays per packet (12_packet.h): 8 doubles fill one AVX-512 register (two AVX2 registers, four
+// SSE2 ones: the compiler splits a wider vector, so the code is the same on every x86-64).
+constexpr int rays_per_packet = 8;
 
-typedef double Lanes __attribute__((vector_size(W * sizeof(double))));
-typedef int64_t Mask __attribute__((vector_size(W * sizeof(int64_t)))); // lane true: all ones
+typedef double Lanes __attribute__((vector_size(rays_per_packet * sizeof(double))));
+typedef int64_t Mask
+    __attribute__((vector_size(rays_per_packet * sizeof(int64_t)))); // lane true: all ones
 
 template <class To, class From> inline To bit_cast(const From &from) {
     static_assert(sizeof(To) == sizeof(From));
@@ -42,8 +45,10 @@ template <class T> inline T power(T x, T n) {
     constexpr double ln2_hi = 0x1.62e42fee00000p-1; // ln 2 to 32 bits: k ln2_hi is exact
     constexpr double ln2_lo = 0x1.a39ef35793c76p-33;
     constexpr double sqrt_half = 0x1.6a09e667f3bcdp-1;
+    constexpr double inv_ln2 = 0x1.71547652b82fep0; // 1 / ln 2
 
     // ln x. The exponent e and the mantissa m in [1, 2), then moved to [sqrt(1/2), sqrt(2)).
+    // (An IEEE-754 double: 52 mantissa bits, above them 11 exponent bits (0x7ff) biased by 1023.)
     I xb = bits(x);
     I e = ((xb >> 52) & 0x7ff) - 1023;
     T m = bit_cast<T>((xb & ((int64_t(1) << 52) - 1)) | (int64_t(1023) << 52));
@@ -57,10 +62,15 @@ template <class T> inline T power(T x, T n) {
     if constexpr (sizeof(T) == sizeof(double)) ed = T(e);
     else ed = __builtin_convertvector(e, Lanes);
     T z = n * (ed * ln2_hi + (2 * s * series + ed * ln2_lo)); // n ln x, <= 0
+    // Below 2^-1100 the result is 0 whatever the rounding below; z is set to 0 there so that k
+    // stays a small integer (the rounding trick needs |z / ln 2| < 2^51; a shininess of 1e300
+    // gives z near -1e300).
+    const auto underflow = z < -1100 * (ln2_hi + ln2_lo);
+    z = select(underflow, T{} + 0.0, z);
 
     // exp z. k = round(z / ln 2) by the 1.5 2^52 trick (round to nearest, no library call).
     constexpr double shifter = 0x1.8p52;
-    T kd = (z * 0x1.71547652b82fep0 + shifter) - shifter;
+    T kd = (z * inv_ln2 + shifter) - shifter;
     T r = (z - kd * ln2_hi) - kd * ln2_lo;
     T taylor = T{} + 1.0 / 87178291200.0; // 1/14!
     double factorial = 87178291200.0;
@@ -69,8 +79,13 @@ template <class T> inline T power(T x, T n) {
         taylor = taylor * r + 1.0 / factorial;
     }
     I ki = bits(kd + shifter) - bits(T{} + shifter);
-    T scale = bit_cast<T>((ki + 1023) << 52);
-    return select(ki < -1022, T{} + 0.0, taylor * scale);
+    // 2^k from its biased exponent k + 1023, for k >= -1022; below that the result is flushed
+    // to 0, and the exponent is held at 1 so the shift never meets a negative number (undefined
+    // behaviour in C++17).
+    const auto tiny = ki < -1022;
+    const I biased = tiny ? I{} + 1 : ki + 1023;
+    T scale = bit_cast<T>(biased << 52);
+    return select(underflow | tiny, T{} + 0.0, taylor * scale);
 }
 
 } // namespace rt
