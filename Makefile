@@ -67,9 +67,11 @@ test: setup lint
 # in build/sanitize: .venv's own build is left alone), then the tests that exercise the core
 # (tests/tracer) run against it, in one process that loads it as tracer._core. The sanitizer's
 # runtime must be the process's first library, hence LD_PRELOAD (dropped again for the
-# processes the tests start, which run the ordinary build); CPython keeps memory until exit by
-# design, so leak reports are off; any other report ends the run with an error, and
-# --capture=sys lets it reach the terminal. Deselected: the demo verb, which runs POV-Ray and
+# processes the tests start, which run the ordinary build). libstdc++ is preloaded with it: the
+# runtime wraps __cxa_throw when it starts, and a C++ exception thrown later (nanobind
+# re-raising a Python error from the progress callback) would find no real function to call.
+# CPython keeps memory until exit by design, so leak reports are off; any other report ends the
+# run with an error, and --capture=sys lets it reach the terminal. Deselected: the demo verb, which runs POV-Ray and
 # Mitsuba (their JIT and runtimes are not ours to check).
 SANITIZE_DIR := build/sanitize
 SANITIZE_PYTEST := "-q", "--capture=sys", "-p", "no:cacheprovider", "-p", "no:xdist", \
@@ -87,7 +89,8 @@ sanitize: setup
 	  -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRTLAB_SANITIZE=ON -DPython_EXECUTABLE=$(abspath $(PY)) \
 	  -Dnanobind_DIR="$$($(PY) -m nanobind --cmake_dir)" >/dev/null
 	$(VENV)/bin/cmake --build $(SANITIZE_DIR)
-	LD_PRELOAD="$$(c++ -print-file-name=libasan.so)" ASAN_OPTIONS=detect_leaks=0 \
+	LD_PRELOAD="$$(c++ -print-file-name=libasan.so) $$(c++ -print-file-name=libstdc++.so)" \
+	  ASAN_OPTIONS=detect_leaks=0 \
 	  UBSAN_OPTIONS=print_stacktrace=1 $(PY) -c '$(SANITIZE_RUN)'
 
 clean:
