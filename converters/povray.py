@@ -1,7 +1,7 @@
 """Scene model -> POV-Ray 3.7 SDL that reproduces the classic model exactly.
 
-What makes POV-Ray compute the slides' model (facts in ../shared/renderers.md, checked by
-tests/reference/test_against_references.py):
+What makes POV-Ray compute the slides' model (each fact checked by
+tests/reference/test_against_references.py and tests/converters/test_converter_bugs.py):
 
 - ``#version 3.7`` and ``assumed_gamma 1.0``: linear colours, no gamma games.
 - The camera: POV-Ray is left-handed and its ``angle`` is the *horizontal* field of view; a

@@ -2,7 +2,8 @@
 
 The first render of a scene in a process JIT-compiles its kernels (llvm variants); the second
 is warm. ``compile_seconds`` is the first render's time beyond the warm one, ``render_seconds``
-the warm render: report them apart, as ../shared/renderers.md advises.
+the warm render: report them apart (the compile costs 0.2-0.5 s a process, which would swamp a
+small render's time).
 """
 
 from __future__ import annotations
