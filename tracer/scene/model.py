@@ -26,14 +26,42 @@ INTEGRATORS = ("classic", "aov", "path")
 ACCELERATIONS = ("bvh", "bounding_box", "none")
 
 
+#: How a stereo pair's two eyes make one image (slide "Stereoscopy"): side by side (left eye
+#: left), over and under (left eye on top), a red-cyan anaglyph, or one eye alone.
+STEREO_LAYOUTS = ("side_by_side", "over_under", "anaglyph", "left", "right")
+
+
+@dataclass(frozen=True)
+class Stereo:
+    """A stereo pair of cameras: the parallel-axis asymmetric frustum (tracer/cpp/03_camera.h
+    stereo_eye()). The eyes sit eye_separation apart along the camera's right vector, both
+    looking along its forward direction; their frusta coincide on the plane at distance
+    ``convergence`` (world units, like eye_separation)."""
+
+    eye_separation: float
+    convergence: float
+    layout: str = "side_by_side"
+
+
 @dataclass(frozen=True)
 class Camera:
     eye: Vec3
     look_at: Vec3
     up: Vec3 = (0.0, 1.0, 0.0)
     fov_y: float = 45.0  # vertical field of view, degrees
-    width: int = 320
+    width: int = 320  # of one eye's image when stereo
     height: int = 240
+    stereo: Stereo | None = None  # None: a single camera
+
+    @property
+    def image_shape(self) -> tuple[int, int]:
+        """(rows, columns) of the rendered image: both eyes' for side_by_side and over_under."""
+        layout = self.stereo.layout if self.stereo is not None else None
+        if layout == "side_by_side":
+            return self.height, 2 * self.width
+        if layout == "over_under":
+            return 2 * self.height, self.width
+        return self.height, self.width
 
 
 @dataclass(frozen=True)

@@ -13,8 +13,10 @@ from tracer.scene.model import (
     MAX_DEPTH,
     MAX_IMAGE_SIDE,
     MAX_SPP,
+    STEREO_LAYOUTS,
     Camera,
     RenderSettings,
+    Stereo,
 )
 from tracer.scene.values import Reader, suggest
 from tracer.scene.vectors import cross, norm, sub
@@ -27,7 +29,7 @@ MAX_SEED = 2**64 - 1
 
 
 def read_camera(r: Reader, data: Any) -> Camera:
-    t = r.table(data, "camera", {"eye", "look_at", "up", "fov_y", "width", "height"})
+    t = r.table(data, "camera", {"eye", "look_at", "up", "fov_y", "width", "height", "stereo"})
     d = Camera(eye=(0, 0, 0), look_at=(0, 0, -1))
     eye = r.vec3(t, "camera", "eye", required=True)
     look_at = r.vec3(t, "camera", "look_at", required=True)
@@ -41,7 +43,21 @@ def read_camera(r: Reader, data: Any) -> Camera:
     side = cross(forward, up)
     if norm(side) <= PARALLEL_UP * norm(forward) * norm(up):
         raise SceneError(r.source, "camera.up", "must not be parallel to the viewing direction")
-    return Camera(eye=eye, look_at=look_at, up=up, fov_y=fov_y, width=width, height=height)
+    stereo = read_stereo(r, t["stereo"]) if t.get("stereo") is not None else None
+    return Camera(
+        eye=eye, look_at=look_at, up=up, fov_y=fov_y, width=width, height=height, stereo=stereo
+    )
+
+
+def read_stereo(r: Reader, data: Any) -> Stereo:
+    """``[camera] stereo = { eye_separation = ..., convergence = ..., layout = ... }``."""
+    path = "camera.stereo"
+    t = r.table(data, path, {"eye_separation", "convergence", "layout"}, what="a stereo pair")
+    return Stereo(
+        eye_separation=r.number(t, path, "eye_separation", required=True, above=0.0),
+        convergence=r.number(t, path, "convergence", required=True, above=0.0),
+        layout=r.choice(t, path, "layout", STEREO_LAYOUTS, default="side_by_side"),
+    )
 
 
 def read_render(r: Reader, data: Any) -> RenderSettings:
