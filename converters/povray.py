@@ -34,6 +34,7 @@ from tracer.scene import (
     PointLight,
     Quad,
     Scene,
+    SceneError,
     Sphere,
     Torus,
     Triangle,
@@ -73,10 +74,12 @@ def _camera(scene: Scene) -> list[str]:
             "}",
         ]
     if cam.stereo.layout not in ("left", "right"):
-        raise ValueError(
-            f"{scene.source}: camera.stereo.layout: POV-Ray renders one eye at a time; convert "
-            f"each eye alone (tracer.render.eye_scene(scene, 'left') and 'right'), got "
-            f"{cam.stereo.layout!r}"
+        raise SceneError(
+            scene.source,
+            "camera.stereo.layout",
+            "expected 'left' or 'right' (POV-Ray renders one eye at a time: convert each eye "
+            "alone, tracer.render.eye_scene), "
+            f"got {cam.stereo.layout!r}",
         )
     # One eye of a stereo pair (tracer/cpp/03_camera.h stereo_eye()). POV-Ray's perspective
     # ray is direction + x right + y up, x and y from -1/2 to 1/2 (pixel centres with -A): with

@@ -27,6 +27,7 @@ from tracer.scene import (
     Plane,
     PointLight,
     Scene,
+    SceneError,
     Sphere,
     Torus,
     cylinder_height,
@@ -120,10 +121,12 @@ def _sensor(scene: Scene, sampler: dict[str, Any]) -> dict[str, Any]:
     eye, look_at, stereo = cam.eye, cam.look_at, {}
     if cam.stereo is not None:
         if cam.stereo.layout not in ("left", "right"):
-            raise ValueError(
-                f"{scene.source}: camera.stereo.layout: Mitsuba's sensor is one eye; convert "
-                f"each eye alone (tracer.render.eye_scene(scene, 'left') and 'right'), got "
-                f"{cam.stereo.layout!r}"
+            raise SceneError(
+                scene.source,
+                "camera.stereo.layout",
+                "expected 'left' or 'right' (Mitsuba's sensor is one eye: convert each eye alone, "
+                "tracer.render.eye_scene), "
+                f"got {cam.stereo.layout!r}",
             )
         # One eye of a stereo pair (tracer/cpp/03_camera.h stereo_eye()): the eye moved, its
         # window shifted. Mitsuba's principal point offset is a fraction of the film's width,

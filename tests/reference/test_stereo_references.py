@@ -23,7 +23,7 @@ from reference.mitsuba import run_mitsuba
 from reference.povray import run_povray
 from tests.helpers import SCENES
 from tracer.render import eye_scene
-from tracer.scene import parse_scene
+from tracer.scene import SceneError, parse_scene
 
 EYES = ("left", "right")
 
@@ -94,9 +94,10 @@ def test_a_principal_point_of_the_wrong_sign_fails_against_mitsuba():
 
 
 def test_the_converters_refuse_two_eyes_in_one_render():
-    with pytest.raises(ValueError, match=r"camera\.stereo\.layout: POV-Ray renders one eye"):
+    words = r"camera\.stereo\.layout: expected 'left' or 'right' \({}"
+    with pytest.raises(SceneError, match=words.format("POV-Ray renders one eye")):
         to_povray(pair())
-    with pytest.raises(ValueError, match=r"camera\.stereo\.layout: Mitsuba's sensor is one eye"):
+    with pytest.raises(SceneError, match=words.format("Mitsuba's sensor is one eye")):
         to_mitsuba_dict(pair())
 
 
