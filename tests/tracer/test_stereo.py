@@ -9,6 +9,7 @@ inverting it says where any point lands in an eye, with no formula of the camera
 from __future__ import annotations
 
 import math
+import sys
 
 import numpy as np
 import pytest
@@ -22,6 +23,7 @@ from tracer.render import (
     anaglyph,
     compose_stereo,
     eye_scene,
+    render_progressive,
     render_with_stats,
 )
 from tracer.scene import SceneError, parse_scene
@@ -217,6 +219,8 @@ def test_a_stereo_camera_reads_writes_and_overrides():
         ({"eye_separation": "wide", "convergence": 5.0}, "camera.stereo.eye_separation",
          "expected a number"),
         ([0.1, 5.0], "camera.stereo", "expected a table"),
+        ({"eye_separation": 1.0, "convergence": 1e-300}, "camera.stereo.convergence",
+         "expected at least eye_separation / 1e+06"),
     ],
 )  # fmt: skip
 def test_bad_stereo_settings_name_the_key(stereo, key, words):
@@ -380,3 +384,36 @@ def test_the_anaglyph_never_shows_negative_light():
     raw = blue.reshape(-1, 3) @ (DUBOIS_LEFT + DUBOIS_RIGHT).T
     assert raw.min() < 0  # the projection asks for negative green here
     assert anaglyph(blue, blue).min() == 0.0
+
+
+def test_the_largest_separation_allowed_still_renders_finite_rays():
+    """At the bound, eye_separation = 1e6 convergence, the window shift is 5e5 plane units:
+    the rays are still finite and unit length (past it the reader refuses, above)."""
+    data = stereo_data()
+    data["camera"]["stereo"].update(eye_separation=1e6, convergence=1.0)
+    scene = tracer.load_scene(data)
+    image = tracer.render(scene, threads=1)
+    assert np.isfinite(image).all()
+    core = camera(-1, separation=1e6, convergence=1.0)
+    _, d = core.primary_ray(0.5, 0.5)
+    assert np.linalg.norm(d) == pytest.approx(1.0, abs=1e-15)
+
+
+def test_memory_is_counted_for_both_eyes_and_their_composition(monkeypatch):
+    """A side_by_side pair keeps both eyes (2 w h pixels) and their composition (2 w h): four
+    times one eye's image. Memory is made to hold three: a single camera fits, the pair not."""
+    tr = sys.modules["tracer.render"]  # the module: tracer.render is also the function
+    one_eye = 16 * 12 * 3 * 4  # bytes: float32 RGB
+    monkeypatch.setattr(tr, "memory_available", lambda: (3 * one_eye, "the test"))
+    data = stereo_data()
+    tr.check_memory(tracer.load_scene({**data, "camera": {**data["camera"], "stereo": None}}))
+    with pytest.raises(tr.ImageTooLargeError, match="a 32x12 image needs 9216 bytes"):
+        tr.check_memory(tracer.load_scene(data))
+
+
+def test_a_progressive_render_refines_both_eyes():
+    scene = tracer.load_scene(stereo_data("over_under"))
+    result = render_progressive(scene, 0.0, threads=1)
+    assert result.image.shape == (24, 16, 3)
+    single = render_with_stats(scene, threads=1, progress=False).image
+    assert np.array_equal(result.image, single)  # one pass of spp = 1: the same rays

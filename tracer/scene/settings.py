@@ -24,6 +24,13 @@ from tracer.scene.vectors import cross, norm, sub
 #: Up and the viewing direction whose angle has a sine below this are parallel: the camera's
 #: right vector, their cross product, would be rounding noise.
 PARALLEL_UP = 1e-12
+#: A stereo pair's eyes are at most this many convergence distances apart. Each window shifts
+#: (e/2)/C on the image plane (tracer/cpp/03_camera.h stereo_eye()): at 1e6 it is already
+#: 5e5 plane units, far past any image (the eyes share nothing on screen), yet a ray direction
+#: that large still squares without overflow; an unbounded ratio (convergence = 1e-300) would
+#: make the shift infinite and every ray NaN. Eyes converging at a sensible distance have
+#: e/C around 0.03 (6.5 cm at 2 m).
+MAX_SEPARATION_RATIO = 1e6
 #: The core's seed is an unsigned 64-bit integer (tracer/cpp/09_scene.h).
 MAX_SEED = 2**64 - 1
 
@@ -53,11 +60,18 @@ def read_stereo(r: Reader, data: Any) -> Stereo:
     """``[camera] stereo = { eye_separation = ..., convergence = ..., layout = ... }``."""
     path = "camera.stereo"
     t = r.table(data, path, {"eye_separation", "convergence", "layout"}, what="a stereo pair")
-    return Stereo(
-        eye_separation=r.number(t, path, "eye_separation", required=True, above=0.0),
-        convergence=r.number(t, path, "convergence", required=True, above=0.0),
-        layout=r.choice(t, path, "layout", STEREO_LAYOUTS, default="side_by_side"),
-    )
+    separation = r.number(t, path, "eye_separation", required=True, above=0.0)
+    convergence = r.number(t, path, "convergence", required=True, above=0.0)
+    if separation > MAX_SEPARATION_RATIO * convergence:
+        raise SceneError(
+            r.source,
+            f"{path}.convergence",
+            f"expected at least eye_separation / {MAX_SEPARATION_RATIO:g} = "
+            f"{separation / MAX_SEPARATION_RATIO:g}, got {convergence:g} (the eyes' windows would "
+            "shift past any image)",
+        )
+    layout = r.choice(t, path, "layout", STEREO_LAYOUTS, default="side_by_side")
+    return Stereo(eye_separation=separation, convergence=convergence, layout=layout)
 
 
 def read_render(r: Reader, data: Any) -> RenderSettings:
