@@ -59,15 +59,16 @@ struct Camera {
 // point there lands on the same pixel in both eyes, and nothing has vertical parallax).
 // Rotating the eyes towards the convergence point instead ("toe-in") tilts their image planes
 // against each other: points away from the centre get vertical parallax, which the eyes cannot
-// fuse (P. Bourke, "Calculating stereo pairs", 1999; Woods et al., SPIE 1915, 1993).
+// fuse (P. Bourke, "Calculating stereo pairs", 1999; A. Woods, T. Docherty, R. Koch, "Image
+// distortions in stereoscopic video systems", Proc. SPIE 1915, 1993).
 inline Camera stereo_eye(const Camera &centre, double eye_separation, double convergence,
                          int side) {
-    Camera eye = centre; // the same frame: forward, right and true_up are the centre's
+    Camera view = centre; // the same frame: forward, right and true_up are the centre's
     const double half = side * eye_separation / 2;
-    eye.eye = centre.eye + half * centre.right;
-    eye.look_at = centre.look_at + half * centre.right; // parallel axes
-    eye.window_shift = centre.window_shift - half / convergence;
-    return eye;
+    view.eye = centre.eye + half * centre.right;
+    view.look_at = centre.look_at + half * centre.right; // parallel axes
+    view.window_shift = centre.window_shift - half / convergence;
+    return view;
 }
 
 } // namespace rt
