@@ -10,6 +10,7 @@ convergence), and Mitsuba's offset with the wrong sign.
 
 from __future__ import annotations
 
+import json
 from functools import cache
 
 import numpy as np
@@ -18,6 +19,7 @@ import pytest
 import tracer
 from converters.mitsuba import to_mitsuba_dict
 from converters.povray import to_povray
+from reference.compare import compare_scene, format_table
 from reference.metrics import FLOAT32_SLACK, MAX_SHARE_OVER, MITSUBA_TOLERANCE, agrees
 from reference.mitsuba import run_mitsuba
 from reference.povray import run_povray
@@ -105,3 +107,19 @@ def test_a_single_camera_converts_as_before():
     """No stereo: the POV-Ray camera is the look_at form every reference was checked with."""
     sdl = to_povray(tracer.load_scene(SCENES / "shadows.toml"))
     assert "look_at" in sdl and "direction" not in sdl
+
+
+def test_compare_checks_each_eye_of_a_pair(tmp_path):
+    """``rtlab compare`` on a stereo scene (reference/compare.py): one row per eye and
+    renderer, each reference's verdict naming its eye, images and heat maps per eye."""
+    rows = compare_scene(pair(), out_dir=tmp_path, json_path=tmp_path / "m.json")
+    assert [(r["eye"], r["renderer"]) for r in rows] == [
+        (eye, name) for eye in EYES for name in ("rtlab", "povray", "mitsuba-llvm")
+    ]
+    verdicts = [r for r in rows if r["renderer"] != "rtlab"]
+    assert all(r["agrees"] is True for r in verdicts), [r["verdict"] for r in verdicts]
+    assert all(r["verdict"].startswith(f"{r['eye']} eye: ") for r in verdicts)
+    assert (tmp_path / "shadows-left-diff-povray.png").is_file()
+    assert (tmp_path / "shadows-right-rtlab.exr").is_file()
+    assert len(json.loads((tmp_path / "m.json").read_text())) == 6
+    assert "R mitsuba-llvm" in format_table(rows)
