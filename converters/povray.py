@@ -34,6 +34,7 @@ from tracer.scene import (
     PointLight,
     Quad,
     Scene,
+    SceneError,
     Sphere,
     Torus,
     Triangle,
@@ -41,6 +42,7 @@ from tracer.scene import (
     to_world,
     triangles,
 )
+from tracer.scene.vectors import cross, sub, unit
 
 
 def _num(x: float) -> str:
@@ -57,9 +59,54 @@ def horizontal_angle(fov_y: float, width: int, height: int) -> float:
     return math.degrees(2 * math.atan(width / height * math.tan(math.radians(fov_y) / 2)))
 
 
+def _camera(scene: Scene) -> list[str]:
+    cam = scene.camera
+    if cam.stereo is None:
+        return [
+            "camera {",
+            "  perspective",
+            f"  location {_vec(cam.eye)}",
+            f"  right -x*{_num(cam.width / cam.height)}",
+            "  up y",
+            f"  angle {_num(horizontal_angle(cam.fov_y, cam.width, cam.height))}",
+            f"  sky {_vec(cam.up)}",
+            f"  look_at {_vec(cam.look_at)}",
+            "}",
+        ]
+    if cam.stereo.layout not in ("left", "right"):
+        raise SceneError(
+            scene.source,
+            "camera.stereo.layout",
+            "expected 'left' or 'right' (POV-Ray renders one eye at a time: convert each eye "
+            "alone, tracer.render.eye_scene), "
+            f"got {cam.stereo.layout!r}",
+        )
+    # One eye of a stereo pair (tracer/cpp/03_camera.h stereo_eye()). POV-Ray's perspective
+    # ray is direction + x right + y up, x and y from -1/2 to 1/2 (pixel centres with -A): with
+    # the vectors given in world space and no look_at or angle to re-aim them, a direction with
+    # a component along right is the shifted, off-axis window itself.
+    eye, look_at, shift = cam.one_eye()
+    forward = unit(sub(look_at, eye))
+    right = unit(cross(forward, cam.up))
+    up = cross(right, forward)
+    height = 2 * math.tan(math.radians(cam.fov_y) / 2)
+    width = height * cam.width / cam.height
+    direction = tuple(f + shift * r for f, r in zip(forward, right, strict=True))
+    return [
+        "camera {",
+        "  perspective",
+        f"  location {_vec(eye)}",
+        f"  direction {_vec(direction)}",
+        f"  right {_vec(tuple(width * r for r in right))}",
+        f"  up {_vec(tuple(height * u for u in up))}",
+        "}",
+    ]
+
+
 def to_povray(scene: Scene) -> str:
-    """The scene as POV-Ray 3.7 SDL text; render with ``povray -D -A``."""
-    cam, ren = scene.camera, scene.render
+    """The scene as POV-Ray 3.7 SDL text; render with ``povray -D -A``. A stereo pair converts
+    one eye at a time (layout ``left`` or ``right``: tracer.render.eye_scene)."""
+    ren = scene.render
     out = [
         f"// Converted by rtlab from {scene.source}: the classic model, every term explicit.",
         "#version 3.7;",
@@ -70,15 +117,7 @@ def to_povray(scene: Scene) -> str:
         f"  ambient_light rgb {_vec(ren.ambient_light)}",
         "}",
         f"background {{ rgb {_vec(ren.background)} }}",
-        "camera {",
-        "  perspective",
-        f"  location {_vec(cam.eye)}",
-        f"  right -x*{_num(cam.width / cam.height)}",
-        "  up y",
-        f"  angle {_num(horizontal_angle(cam.fov_y, cam.width, cam.height))}",
-        f"  sky {_vec(cam.up)}",
-        f"  look_at {_vec(cam.look_at)}",
-        "}",
+        *_camera(scene),
     ]
     far = 1.0e4 * scene_extent(scene)
     for light in scene.lights:

@@ -82,6 +82,8 @@ def render_geometry(scene: Scene) -> tuple[np.ndarray, np.ndarray, float, float]
     import trimesh
 
     cam = scene.camera
+    if cam.stereo is not None:  # an off-axis window is no pyrender.PerspectiveCamera
+        raise ValueError(f"{scene.source}: camera.stereo: pyrender renders single cameras only")
     eye = np.asarray(cam.eye, dtype=np.float64)
     meshes = {i: object_mesh(obj, eye, 0.0) for i, obj in enumerate(scene.objects)
               if not isinstance(obj, Plane)}  # fmt: skip

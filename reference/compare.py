@@ -27,7 +27,7 @@ from reference.metrics import (
     heat_map,
 )
 from tracer.image import atomic_path, save_image
-from tracer.render import render_with_stats
+from tracer.render import eye_scene, render_with_stats
 from tracer.scene import Scene, Torus
 
 REFERENCES = ("povray", "mitsuba")
@@ -106,6 +106,17 @@ def compare_scene(
     to ``written``, each complete (written atomically)."""
     stem = stem or Path(scene.source).stem or "scene"
     written = [] if written is None else written
+    st = scene.camera.stereo
+    if st is not None and st.layout not in ("left", "right"):
+        # A stereo pair: each eye compared on its own, as the references render one camera
+        # (tracer.render.eye_scene); the rows say which eye.
+        rows = []
+        for eye in ("left", "right"):
+            rows += compare_scene(eye_scene(scene, eye), against, out_dir=out_dir,
+                                  threads=threads, stem=f"{stem}-{eye}", progress=progress,
+                                  written=written)  # fmt: skip
+        _write_json(rows, json_path, written)
+        return rows
     ours = run_rtlab(scene, threads, progress)
     runs = [ours] + [run_reference(name, scene, threads) for name in against]
     rows: list[dict[str, Any]] = []
@@ -120,12 +131,16 @@ def compare_scene(
             "whole_seconds": run.whole_seconds,
             **run.notes,
         }
+        if st is not None:
+            row["eye"] = st.layout
         if run is not ours:
             row.update(compare(run.image, ours.image, run.tolerance).as_dict())
             row["tolerance"] = (
                 "per-pixel output precision" if run.renderer == "povray" else (MITSUBA_TOLERANCE)
             )
             row["agrees"], row["verdict"] = verdict(scene, run, ours)
+            if st is not None:
+                row["verdict"] = f"{st.layout} eye: {row['verdict']}"
         if out is not None:
             for suffix in (".exr", ".png"):
                 written.append(save_image(out / f"{stem}-{run.renderer}{suffix}", run.image))
@@ -136,11 +151,17 @@ def compare_scene(
                 written.append(diff)
                 row["heat_map"] = str(diff)
         rows.append(row)
+    _write_json(rows, json_path, written)
+    return rows
+
+
+def _write_json(
+    rows: list[dict[str, Any]], json_path: str | os.PathLike[str] | None, written: list[Path]
+) -> None:
     if json_path is not None:
         with atomic_path(json_path) as tmp:
             tmp.write_text(json.dumps(_jsonable(rows), indent=2) + "\n")
         written.append(Path(json_path))
-    return rows
 
 
 def _jsonable(value: Any) -> Any:
@@ -157,6 +178,7 @@ def _jsonable(value: Any) -> Any:
 
 def format_table(rows: list[dict[str, Any]]) -> str:
     """The comparison as a plain-text table, rtlab's time first, each reference against it."""
+    eyes = any("eye" in r for r in rows)  # a stereo pair: the renderer column names the eye
     head = (f"{'renderer':<14}{'RMSE':>10}{'max abs':>10}{'PSNR dB':>9}{'SSIM':>8}{'FLIP':>8}"
             f"{'over tol':>10}{'trace s':>9}{'whole s':>9}{'agrees':>8}")  # fmt: skip
     lines = [head, "-" * len(head)]
@@ -168,8 +190,8 @@ def format_table(rows: list[dict[str, Any]]) -> str:
         else:
             metrics = f"{'(reference of the comparison)':>55}"
         agreed = {True: "yes", False: "NO", None: "-"}[r.get("agrees")]
+        name = f"{r['eye'][0].upper()} {r['renderer']}" if eyes else r["renderer"]
         lines.append(
-            f"{r['renderer']:<14}{metrics}{r['trace_seconds']:>9.3f}{r['whole_seconds']:>9.3f}"
-            f"{agreed:>8}"
+            f"{name:<14}{metrics}{r['trace_seconds']:>9.3f}{r['whole_seconds']:>9.3f}{agreed:>8}"
         )
     return "\n".join(lines)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import sys
 import time
@@ -21,6 +22,7 @@ from tracer.scene import (
     PointLight,
     Quad,
     Scene,
+    SceneError,
     Sphere,
     Torus,
     Triangle,
@@ -101,14 +103,17 @@ def _gib(n: int) -> str:
 def check_memory(scene: Scene, bytes_per_value: int = 4) -> None:
     """Refuse, before anything is allocated, a render whose image (float32 values: 3 per pixel,
     5 for aov) would not fit in the memory left, rather than let the kernel kill the process
-    half way through. ``bytes_per_value`` counts every copy a caller keeps of each value."""
+    half way through. ``bytes_per_value`` counts every copy a caller keeps of each value. A
+    stereo pair's two eyes are kept while they are composed: their pixels count too."""
     c = scene.camera
     channels = len(AOV_CHANNELS) if scene.render.integrator == "aov" else 3
-    needed = c.width * c.height * channels * bytes_per_value
+    rows, columns = c.image_shape
+    pixels = rows * columns + (c.width * c.height * len(_eyes(scene)) if c.stereo else 0)
+    needed = pixels * channels * bytes_per_value
     available = memory_available()
     if available is not None and needed > available[0]:
         raise ImageTooLargeError(
-            f"{scene.source}: a {c.width}x{c.height} image needs {needed} bytes "
+            f"{scene.source}: a {columns}x{rows} image needs {needed} bytes "
             f"({_gib(needed)}), and {available[0]} bytes ({_gib(available[0])}) are available "
             f"({available[1]}); render it smaller"
         )
@@ -116,7 +121,8 @@ def check_memory(scene: Scene, bytes_per_value: int = 4) -> None:
 
 @dataclass(frozen=True)
 class RenderResult:
-    #: classic: linear RGB, shape (height, width, 3); aov: (height, width, 5), the channels of
+    #: classic: linear RGB, shape (height, width, 3) (a stereo pair: Camera.image_shape, its
+    #: eyes composed); aov: (height, width, 5), the channels of
     #: AOV_CHANNELS (depth: distance along the primary ray, inf on a miss; object_id: index in
     #: [[objects]], -1 on a miss; N: the shading normal, front side, 0 on a miss).
     image: npt.NDArray[np.float32]
@@ -142,11 +148,95 @@ def _set_render(core: _core.Scene, scene: Scene) -> None:
     core.set_render(r.max_depth, r.min_coefficient, r.spp, r.seed, r.background, r.ambient_light)
 
 
+# --------------------------------------------------------------------------- stereo pairs
+# Slide "Stereoscopy": an eye of a stereo pair is a camera (tracer/cpp/03_camera.h
+# stereo_eye()); each eye is rendered like any single camera, then the two are composed.
+
+#: The eyes a stereo layout renders, left first.
+_LAYOUT_EYES = {
+    "side_by_side": ("left", "right"),
+    "over_under": ("left", "right"),
+    "anaglyph": ("left", "right"),
+    "left": ("left",),
+    "right": ("right",),
+}
+_SIDE = {"left": -1, "right": +1}
+
+#: Eric Dubois, "A projection method to generate anaglyph stereo images", ICASSP 2001, and his
+#: "Least squares how to" for Photoshop (www.site.uottawa.ca/~edubois/anaglyph/): the red-cyan
+#: matrices (rows: the anaglyph's R, G, B; columns: the eye's R, G, B), the least-squares
+#: projection of the stereo pair, seen through the red and cyan filters of the glasses, onto
+#: what one display colour can show both eyes. They are derived from the spectra of a CRT's
+#: phosphors (Rec. 709 / sRGB primaries) and the filters, and act on linear RGB (before any
+#: gamma encoding): rtlab's images are linear RGB in those primaries. Each row of [L R] sums to
+#: 1 to the published three decimals, so a white seen by both eyes stays white.
+DUBOIS_LEFT = np.array([[0.456, 0.500, 0.176], [-0.040, -0.038, -0.016], [-0.015, -0.021, -0.005]])
+DUBOIS_RIGHT = np.array([[-0.043, -0.088, -0.002], [0.378, 0.734, -0.018], [-0.072, -0.113, 1.226]])
+
+
+def anaglyph(
+    left: npt.NDArray[np.floating], right: npt.NDArray[np.floating]
+) -> npt.NDArray[np.float32]:
+    """Dubois' least-squares red-cyan anaglyph of two linear RGB images (height, width, 3).
+    A display cannot show negative light: negative values are clipped to 0 (values above 1
+    stay, as in any linear image, until it is written)."""
+    mixed = left.astype(np.float64) @ DUBOIS_LEFT.T + right.astype(np.float64) @ DUBOIS_RIGHT.T
+    return np.maximum(mixed, 0.0).astype(np.float32)
+
+
+def compose_stereo(
+    layout: str, left: npt.NDArray[np.float32] | None, right: npt.NDArray[np.float32] | None
+) -> npt.NDArray[np.float32]:
+    """The image of a stereo ``layout`` from its eyes' images: side_by_side (the left eye on the
+    left, for a viewer looking parallel), over_under (the left eye on top), anaglyph, or one
+    eye alone (``left``, ``right``)."""
+    if layout == "left" and left is not None:
+        return left
+    if layout == "right" and right is not None:
+        return right
+    if left is None or right is None:
+        raise ValueError(f"the stereo layout {layout!r} needs both eyes' images")
+    if layout == "side_by_side":
+        return np.ascontiguousarray(np.concatenate([left, right], axis=1))
+    if layout == "over_under":
+        return np.ascontiguousarray(np.concatenate([left, right], axis=0))
+    if layout == "anaglyph":
+        return anaglyph(left, right)
+    raise ValueError(f"unknown stereo layout {layout!r}")
+
+
+def _eyes(scene: Scene) -> tuple[str, ...]:
+    st = scene.camera.stereo
+    return _LAYOUT_EYES[st.layout] if st is not None else ()
+
+
+def eye_scene(scene: Scene, eye: str) -> Scene:
+    """The scene as one eye of its stereo pair sees it (layout ``left`` or ``right``): what the
+    converters take, one render per eye."""
+    st = scene.camera.stereo
+    if st is None:
+        raise ValueError(f"{scene.source}: the camera is not a stereo pair")
+    if eye not in _SIDE:
+        raise ValueError(f"eye must be 'left' or 'right', got {eye!r}")
+    camera = dataclasses.replace(scene.camera, stereo=dataclasses.replace(st, layout=eye))
+    return dataclasses.replace(scene, camera=camera)
+
+
+def _set_camera(core: _core.Scene, scene: Scene, eye: str | None = None) -> None:
+    """The core's camera: the scene's single camera, or one eye of its stereo pair."""
+    c, st = scene.camera, scene.camera.stereo
+    if st is None or eye is None:
+        core.set_camera(c.eye, c.look_at, c.up, c.fov_y, c.width, c.height)
+    else:
+        core.set_camera(c.eye, c.look_at, c.up, c.fov_y, c.width, c.height,
+                        _SIDE[eye], st.eye_separation, st.convergence)  # fmt: skip
+
+
 def to_core(scene: Scene) -> _core.Scene:
-    """Fill a C++ core scene from the validated model."""
+    """Fill a C++ core scene from the validated model (a stereo pair's camera: its first eye)."""
     core = _core.Scene()
-    c = scene.camera
-    core.set_camera(c.eye, c.look_at, c.up, c.fov_y, c.width, c.height)
+    eyes = _eyes(scene)
+    _set_camera(core, scene, eyes[0] if eyes else None)
     _set_render(core, scene)
     index = {}
     for name, m in scene.materials.items():
@@ -247,8 +337,42 @@ def core_integrator(scene: Scene, packets: bool = True) -> _core.Integrator:
 def _render_core(
     scene: Scene, core: _core.Scene, threads: int, progress: bool | None, packets: bool
 ) -> RenderResult:
-    """Render a core scene already built from ``scene`` (its hierarchies included)."""
+    """Render a core scene already built from ``scene`` (its hierarchies included): a stereo
+    pair eye by eye, the core's camera set to each in turn, then composed."""
+    eyes = _eyes(scene)
+    if not eyes:
+        return _render_camera(scene, core, threads, progress, packets)
+    st = scene.camera.stereo
+    assert st is not None
+    if st.layout == "anaglyph" and scene.render.integrator == "aov":
+        raise SceneError(
+            scene.source,
+            "camera.stereo.layout",
+            "expected side_by_side, over_under, left or right with the aov integrator, got "
+            "'anaglyph' (it mixes colours; depth, object ids and normals are no colours)",
+        )
     check_memory(scene)
+    images: dict[str, npt.NDArray[np.float32]] = {}
+    rays: dict[str, int] = {}
+    seconds, ran = 0.0, ""
+    for eye in eyes:
+        _set_camera(core, scene, eye)
+        result = _render_camera(scene, core, threads, progress, packets)
+        images[eye] = result.image
+        for key, value in result.rays.items():
+            rays[key] = rays.get(key, 0) + value
+        seconds += result.seconds
+        ran = result.integrator
+    image = compose_stereo(st.layout, images.get("left"), images.get("right"))
+    return RenderResult(image, rays, seconds, threads, ran)
+
+
+def _render_camera(
+    scene: Scene, core: _core.Scene, threads: int, progress: bool | None, packets: bool
+) -> RenderResult:
+    """Render the core scene through the camera it has now."""
+    if scene.camera.stereo is None:  # a stereo pair's eyes were counted together
+        check_memory(scene)
     if progress is None:
         progress = sys.stderr.isatty()
     callback, close = _progress_bar() if progress else (None, lambda: None)
@@ -281,7 +405,9 @@ def render(
     scene: Scene, *, threads: int | None = None, progress: bool | None = None
 ) -> npt.NDArray[np.float32]:
     """Render to a float32 linear RGB array of shape (height, width, 3); with the ``aov``
-    integrator, (height, width, 5): the channels of AOV_CHANNELS."""
+    integrator, (height, width, 5): the channels of AOV_CHANNELS. A stereo pair's width and
+    height are one eye's: side_by_side gives (height, 2 width, 3), over_under (2 height, width,
+    3), anaglyph, left and right (height, width, 3)."""
     return render_with_stats(scene, threads=threads, progress=progress).image
 
 

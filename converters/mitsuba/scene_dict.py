@@ -6,6 +6,7 @@ path tracer's materials as BSDFs (converters.mitsuba.path_bsdf)."""
 
 from __future__ import annotations
 
+import math
 import os
 from pathlib import Path
 from typing import Any
@@ -26,6 +27,7 @@ from tracer.scene import (
     Plane,
     PointLight,
     Scene,
+    SceneError,
     Sphere,
     Torus,
     cylinder_height,
@@ -116,11 +118,30 @@ def _lights(scene: Scene) -> dict[str, Any]:
 
 def _sensor(scene: Scene, sampler: dict[str, Any]) -> dict[str, Any]:
     cam = scene.camera
+    eye, look_at, stereo = cam.eye, cam.look_at, {}
+    if cam.stereo is not None:
+        if cam.stereo.layout not in ("left", "right"):
+            raise SceneError(
+                scene.source,
+                "camera.stereo.layout",
+                "expected 'left' or 'right' (Mitsuba's sensor is one eye: convert each eye alone, "
+                "tracer.render.eye_scene), "
+                f"got {cam.stereo.layout!r}",
+            )
+        # One eye of a stereo pair (tracer/cpp/03_camera.h stereo_eye()): the eye moved, its
+        # window shifted. Mitsuba's principal point offset is a fraction of the film's width,
+        # positive moving the window to the image's right, as rtlab's shift (found by rendering:
+        # the opposite sign puts 15% of the pixels over tolerance; the fraction of the height
+        # instead of the width would miss by a pixel; tests/reference/test_stereo_references.py).
+        eye, look_at, shift = cam.one_eye()
+        plane_width = 2 * math.tan(math.radians(cam.fov_y) / 2) * cam.width / cam.height
+        stereo = {"principal_point_offset_x": shift / plane_width}
     return {
         "type": "perspective",
         "fov": cam.fov_y,
         "fov_axis": "y",
-        "to_world": mi.ScalarTransform4f().look_at(origin=cam.eye, target=cam.look_at, up=cam.up),
+        **stereo,
+        "to_world": mi.ScalarTransform4f().look_at(origin=eye, target=look_at, up=cam.up),
         "sampler": sampler,
         "film": {
             "type": "hdrfilm",

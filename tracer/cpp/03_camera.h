@@ -5,6 +5,9 @@
 // x = (i + 0.5)/W - 0.5, y = 0.5 - (j + 0.5)/H on an image plane at distance 1 that is
 // 2 tan(fov_y/2) high and W/H times that wide. (POV-Ray with -A and Mitsuba's stratified
 // sampler without jitter sample exactly these points; converters/ rely on that.)
+//
+// Slide "Stereoscopy": one eye of a stereo pair is this camera too, moved sideways and with its
+// image window shifted sideways on the image plane (stereo_eye() below).
 #pragma once
 
 #include <cmath>
@@ -20,6 +23,9 @@ struct Camera {
     Vec3 eye, look_at, up{0, 1, 0};
     double fov_y = 45; // vertical field of view, degrees
     int width = 320, height = 240;
+    // The image window's centre, moved this far along `right` on the image plane (in its units,
+    // the plane at distance 1): 0 for a single camera, nonzero for an eye of a stereo pair.
+    double window_shift = 0;
 
     // Derived in initialize(): the orthonormal frame and the size of the image plane.
     Vec3 forward, right, true_up;
@@ -38,9 +44,31 @@ struct Camera {
     Ray primary_ray(double sx, double sy) const {
         double x = sx / width - 0.5;
         double y = 0.5 - sy / height;
-        Vec3 d = forward + (x * plane_width) * right + (y * plane_height) * true_up;
+        // x * plane_width + 0 is x * plane_width exactly (x is never -0), so a single camera's
+        // rays are what they were before stereo pairs existed, bit for bit.
+        Vec3 d = forward + (x * plane_width + window_shift) * right + (y * plane_height) * true_up;
         return {eye, normalize(d)};
     }
 };
+
+// Slide "Stereoscopy": one eye of a stereo pair seen through `centre` (initialized), side = -1
+// for the left eye and +1 for the right. The parallel-axis asymmetric frustum ("off-axis"):
+// the eye moves eye_separation/2 along `right` and keeps the centre's frame, so both eyes look
+// along the same forward; its window moves the other way by (eye_separation/2)/convergence on
+// the image plane, so that on the plane at distance `convergence` the two frusta coincide (a
+// point there lands on the same pixel in both eyes, and nothing has vertical parallax).
+// Rotating the eyes towards the convergence point instead ("toe-in") tilts their image planes
+// against each other: points away from the centre get vertical parallax, which the eyes cannot
+// fuse (P. Bourke, "Calculating stereo pairs", 1999; A. Woods, T. Docherty, R. Koch, "Image
+// distortions in stereoscopic video systems", Proc. SPIE 1915, 1993).
+inline Camera stereo_eye(const Camera &centre, double eye_separation, double convergence,
+                         int side) {
+    Camera view = centre; // the same frame: forward, right and true_up are the centre's
+    const double half = side * eye_separation / 2;
+    view.eye = centre.eye + half * centre.right;
+    view.look_at = centre.look_at + half * centre.right; // parallel axes
+    view.window_shift = centre.window_shift - half / convergence;
+    return view;
+}
 
 } // namespace rt

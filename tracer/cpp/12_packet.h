@@ -421,7 +421,7 @@ inline RayL primary_rays(const Camera &cam, int i0, int j) {
     for (int k = 0; k < rays_per_packet; ++k) sx[k] = (i0 + k) + 0.5;
     Lanes x = sx / double(cam.width) - 0.5;
     double y = 0.5 - (j + 0.5) / cam.height;
-    Vec3L d = splat(cam.forward) + splat(cam.right) * (x * cam.plane_width) +
+    Vec3L d = splat(cam.forward) + splat(cam.right) * (x * cam.plane_width + cam.window_shift) +
               splat(cam.true_up * (y * cam.plane_height));
     return {splat(cam.eye), normalize(d)};
 }

@@ -20,6 +20,7 @@
 
 #include "01_vec3.h"
 #include "02_ray.h"
+#include "03_camera.h"
 #include "04_hit.h"
 #include "05_sphere.h"
 #include "08_light.h"
@@ -162,7 +163,8 @@ NB_MODULE(_core, m) {
         .def(
             "set_camera",
             [](rt::Scene &s, Triple eye, Triple look_at, Triple up, double fov_y, int width,
-               int height) {
+               int height, int stereo_side, double eye_separation, double convergence) {
+                s.camera = rt::Camera{};
                 s.camera.eye = vec(eye);
                 s.camera.look_at = vec(look_at);
                 s.camera.up = vec(up);
@@ -170,8 +172,13 @@ NB_MODULE(_core, m) {
                 s.camera.width = width;
                 s.camera.height = height;
                 s.camera.initialize();
+                if (stereo_side != 0) // 03_camera.h: one eye of a stereo pair
+                    s.camera = rt::stereo_eye(s.camera, eye_separation, convergence, stereo_side);
             },
-            "eye"_a, "look_at"_a, "up"_a, "fov_y"_a, "width"_a, "height"_a)
+            "eye"_a, "look_at"_a, "up"_a, "fov_y"_a, "width"_a, "height"_a, "stereo_side"_a = 0,
+            "eye_separation"_a = 0.0, "convergence"_a = 1.0,
+            "stereo_side: 0 a single camera, -1 the left eye, +1 the right eye of a stereo pair "
+            "(eye_separation, convergence).")
         .def(
             "set_render",
             [](rt::Scene &s, int max_depth, double min_coefficient, int spp, uint64_t seed,

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from tracer.scene.vectors import Color, Vec3, rotation
+from tracer.scene.vectors import Color, Vec3, cross, rotation, sub, unit
 
 #: Image sizes are bounded so a typo (width = 1e9) fails at once instead of exhausting memory.
 MAX_IMAGE_SIDE = 32768
@@ -26,14 +26,57 @@ INTEGRATORS = ("classic", "aov", "path")
 ACCELERATIONS = ("bvh", "bounding_box", "none")
 
 
+#: How a stereo pair's two eyes make one image (slide "Stereoscopy"): side by side (left eye
+#: left), over and under (left eye on top), a red-cyan anaglyph, or one eye alone.
+STEREO_LAYOUTS = ("side_by_side", "over_under", "anaglyph", "left", "right")
+
+
+@dataclass(frozen=True)
+class Stereo:
+    """A stereo pair of cameras: the parallel-axis asymmetric frustum (tracer/cpp/03_camera.h
+    stereo_eye()). The eyes sit eye_separation apart along the camera's right vector, both
+    looking along its forward direction; their frusta coincide on the plane at distance
+    ``convergence`` (world units, like eye_separation)."""
+
+    eye_separation: float
+    convergence: float
+    layout: str = "side_by_side"
+
+
 @dataclass(frozen=True)
 class Camera:
     eye: Vec3
     look_at: Vec3
     up: Vec3 = (0.0, 1.0, 0.0)
     fov_y: float = 45.0  # vertical field of view, degrees
-    width: int = 320
+    width: int = 320  # of one eye's image when stereo
     height: int = 240
+    stereo: Stereo | None = None  # None: a single camera
+
+    @property
+    def image_shape(self) -> tuple[int, int]:
+        """(rows, columns) of the rendered image: both eyes' for side_by_side and over_under."""
+        layout = self.stereo.layout if self.stereo is not None else None
+        if layout == "side_by_side":
+            return self.height, 2 * self.width
+        if layout == "over_under":
+            return 2 * self.height, self.width
+        return self.height, self.width
+
+    def one_eye(self) -> tuple[Vec3, Vec3, float]:
+        """A one-eye stereo layout (``left``, ``right``) as tracer/cpp/03_camera.h stereo_eye()
+        makes it: the eye's position, its look_at (moved with it: parallel axes) and its image
+        window's shift along the camera's right vector, in image-plane units (the plane at
+        distance 1). What the converters write, one eye per render."""
+        st = self.stereo
+        if st is None or st.layout not in ("left", "right"):
+            raise ValueError("one_eye() needs a stereo camera of layout 'left' or 'right'")
+        right = unit(cross(unit(sub(self.look_at, self.eye)), self.up))
+        half = (-1 if st.layout == "left" else 1) * st.eye_separation / 2
+        move = (half * right[0], half * right[1], half * right[2])
+        eye = (self.eye[0] + move[0], self.eye[1] + move[1], self.eye[2] + move[2])
+        look_at = (self.look_at[0] + move[0], self.look_at[1] + move[1], self.look_at[2] + move[2])
+        return eye, look_at, -half / st.convergence
 
 
 @dataclass(frozen=True)

@@ -13,8 +13,10 @@ from tracer.scene.model import (
     MAX_DEPTH,
     MAX_IMAGE_SIDE,
     MAX_SPP,
+    STEREO_LAYOUTS,
     Camera,
     RenderSettings,
+    Stereo,
 )
 from tracer.scene.values import Reader, suggest
 from tracer.scene.vectors import cross, norm, sub
@@ -22,12 +24,19 @@ from tracer.scene.vectors import cross, norm, sub
 #: Up and the viewing direction whose angle has a sine below this are parallel: the camera's
 #: right vector, their cross product, would be rounding noise.
 PARALLEL_UP = 1e-12
+#: A stereo pair's eyes are at most this many convergence distances apart. Each window shifts
+#: (e/2)/C on the image plane (tracer/cpp/03_camera.h stereo_eye()): at 1e6 it is already
+#: 5e5 plane units, far past any image (the eyes share nothing on screen), yet a ray direction
+#: that large still squares without overflow; an unbounded ratio (convergence = 1e-300) would
+#: make the shift infinite and every ray NaN. Eyes converging at a sensible distance have
+#: e/C around 0.03 (6.5 cm at 2 m).
+MAX_SEPARATION_RATIO = 1e6
 #: The core's seed is an unsigned 64-bit integer (tracer/cpp/09_scene.h).
 MAX_SEED = 2**64 - 1
 
 
 def read_camera(r: Reader, data: Any) -> Camera:
-    t = r.table(data, "camera", {"eye", "look_at", "up", "fov_y", "width", "height"})
+    t = r.table(data, "camera", {"eye", "look_at", "up", "fov_y", "width", "height", "stereo"})
     d = Camera(eye=(0, 0, 0), look_at=(0, 0, -1))
     eye = r.vec3(t, "camera", "eye", required=True)
     look_at = r.vec3(t, "camera", "look_at", required=True)
@@ -41,7 +50,28 @@ def read_camera(r: Reader, data: Any) -> Camera:
     side = cross(forward, up)
     if norm(side) <= PARALLEL_UP * norm(forward) * norm(up):
         raise SceneError(r.source, "camera.up", "must not be parallel to the viewing direction")
-    return Camera(eye=eye, look_at=look_at, up=up, fov_y=fov_y, width=width, height=height)
+    stereo = read_stereo(r, t["stereo"]) if t.get("stereo") is not None else None
+    return Camera(
+        eye=eye, look_at=look_at, up=up, fov_y=fov_y, width=width, height=height, stereo=stereo
+    )
+
+
+def read_stereo(r: Reader, data: Any) -> Stereo:
+    """``[camera] stereo = { eye_separation = ..., convergence = ..., layout = ... }``."""
+    path = "camera.stereo"
+    t = r.table(data, path, {"eye_separation", "convergence", "layout"}, what="a stereo pair")
+    separation = r.number(t, path, "eye_separation", required=True, above=0.0)
+    convergence = r.number(t, path, "convergence", required=True, above=0.0)
+    if separation > MAX_SEPARATION_RATIO * convergence:
+        raise SceneError(
+            r.source,
+            f"{path}.convergence",
+            f"expected at least eye_separation / {MAX_SEPARATION_RATIO:g} = "
+            f"{separation / MAX_SEPARATION_RATIO:g}, got {convergence:g} (the eyes' windows would "
+            "shift past any image)",
+        )
+    layout = r.choice(t, path, "layout", STEREO_LAYOUTS, default="side_by_side")
+    return Stereo(eye_separation=separation, convergence=convergence, layout=layout)
 
 
 def read_render(r: Reader, data: Any) -> RenderSettings:

@@ -43,7 +43,7 @@ def unparse(scene: Scene) -> dict[str, Any]:
         return d
 
     return {
-        "camera": plain(scene.camera),
+        "camera": plain(scene.camera, () if scene.camera.stereo is not None else ("stereo",)),
         "render": plain(scene.render),
         "materials": {name: plain(m, ("name",)) for name, m in scene.materials.items()},
         "lights": [plain(light) for light in scene.lights],
