@@ -94,9 +94,12 @@ def _render_to(scene: Scene, outputs: Sequence[Path], args: argparse.Namespace) 
     if not args.quiet:
         rays = result.rays
         total = rays["primary"] + rays["secondary"] + rays["shadow"]
+        stereo = scene.camera.stereo
+        eyes = 2 if stereo is not None and stereo.layout not in ("left", "right") else 1
+        pixels = scene.camera.width * scene.camera.height * eyes
         print(
-            f"{scene.camera.width}x{scene.camera.height}, "
-            f"{rays['primary'] // (scene.camera.width * scene.camera.height)} spp, "
+            f"{scene.camera.width}x{scene.camera.height}{' per eye' if eyes == 2 else ''}, "
+            f"{rays['primary'] // pixels} spp, "
             f"{result.threads} threads: {result.seconds:.3f} s, {total / 1e6:.2f} M rays "
             f"({rays['primary']} primary, {rays['secondary']} secondary, {rays['shadow']} shadow); "
             f"{rays['box_tests']} ray/box and {rays['primitive_tests']} ray/primitive tests"

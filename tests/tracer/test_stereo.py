@@ -417,3 +417,19 @@ def test_a_progressive_render_refines_both_eyes():
     assert result.image.shape == (24, 16, 3)
     single = render_with_stats(scene, threads=1, progress=False).image
     assert np.array_equal(result.image, single)  # one pass of spp = 1: the same rays
+
+
+def test_the_render_summary_counts_samples_per_eye(tmp_path, capsys):
+    """A side-by-side pair traces one primary ray per pixel of each eye: the summary says 1 spp
+    per eye (dividing by one eye's pixels would say 2)."""
+    from tests.helpers import SCENES
+    from tracer.cli import main
+
+    text = (SCENES / "shadows.toml").read_text()
+    stereo = "[camera]\nstereo = { eye_separation = 0.2, convergence = 5.0 }\n"
+    scene = tmp_path / "pair.toml"
+    scene.write_text(text.replace("[camera]\n", stereo, 1))
+    argv = ["render", str(scene), "-o", str(tmp_path / "pair.npy"), "--width", "8", "--height", "6"]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert "8x6 per eye, 1 spp" in out, out
