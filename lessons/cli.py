@@ -48,7 +48,9 @@ def cmd_show(lesson_id: str) -> int:
 def cmd_student(lesson_id: str, out: str, from_dir: str | None) -> int:
     report = write_student_tree(lesson_id, Path(out), Path(from_dir) if from_dir else None)
     report.stubbed.sort(key=lambda r: (r.file, r.begin))
-    names = ", ".join(f"{r.function}()" for r in report.stubbed if r.lesson == lesson_id)
+    names = ", ".join(
+        f"{r.function}()" for r in report.stubbed if r.lesson == lesson_id and not r.is_copy
+    )
     print(f"rtlab: wrote {out}: lesson {lesson_id}, you write {names}")
     later = sorted({r.lesson for r in report.stubbed if r.lesson != lesson_id})
     if later:

@@ -21,7 +21,9 @@ Syntax (one region is the whole body of one function, so that a stub can replace
   regions.
 
 A composite region (code that reveals several lessons) is marked with the latest lesson it
-reveals, so that every student tree up to that lesson hides it.
+reveals, so that every student tree up to that lesson hides it. The packet tracer
+(tracer/cpp/12_packet.h) restates the one-ray solution lane by lane: its regions are copies
+(Region.is_copy), hidden like the solution they copy but not part of any exercise.
 """
 
 from __future__ import annotations
@@ -40,6 +42,8 @@ MENTION = re.compile(
     r"^\s*//\s*(?:BEGIN|END)\b|^\s*//\s*\w+\s+SOLUTION\b|^\s*//.*\b(?i:begin|end)\s+(?i:solution)\b"
 )
 LESSON_ID = re.compile(r"^L\d\d$")
+# Files whose regions copy a solution written elsewhere (the packet tracer's lanes).
+COPIES = frozenset({"12_packet.h"})
 
 
 class MarkerError(ValueError):
@@ -60,6 +64,11 @@ class Region:
     indent: str
     prompt: str  # the PROMPT lines joined, "" when none
     body: tuple[str, ...]  # the solution's lines (between the prompt and END)
+
+    @property
+    def is_copy(self) -> bool:
+        """A copy of a solution, not an exercise (see the module's docstring)."""
+        return self.file in COPIES
 
     @property
     def key(self) -> tuple[str, str, str]:
