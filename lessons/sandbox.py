@@ -53,8 +53,9 @@ class Limits:
     output_bytes: int = 64 << 10
 
 
-# The compiler: cc1plus needs about 1 GiB for the core at -O3 on this machine, and a minute
-# of CPU is several times what one build takes on 2 cores.
+# The compiler: cc1plus needs about 340 MiB for the whole core (bindings.cpp, at -O1 or -O3,
+# measured with /usr/bin/time -f %M), so 2 GiB leaves room for a student's larger code; two
+# minutes of CPU are many times what that build takes (3 to 4.5 s of user time).
 BUILD_LIMITS = Limits(cpu_s=120, wall_s=240, memory_bytes=2 << 30, output_bytes=256 << 10)
 
 

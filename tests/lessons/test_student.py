@@ -228,3 +228,26 @@ def test_the_cli_writes_a_tree_and_refuses_unknown_lessons(tmp_path):
     assert bad.returncode == 2 and "did you mean L03?" in bad.stderr
     assert not (tmp_path / "x").exists()
     assert set(MARKED) <= set(LESSON_IDS)
+
+
+def test_a_trees_extension_source_compiles_against_nanobind(tmp_path):
+    """bindings.cpp, the extension's one translation unit, with every stub of an L02 tree (the
+    most stubs), compiles warning-free: the tree builds the extension, not only the headers."""
+    out = tmp_path / "hw"
+    write_student_tree("L02", out)
+    nanobind = subprocess.run(
+        [sys.executable, "-m", "nanobind", "--include_dir"], capture_output=True, text=True
+    ).stdout.strip()
+    import sysconfig
+
+    includes = [
+        f"-I{nanobind}",
+        f"-I{nanobind}/../ext/robin_map/include",
+        f"-I{sysconfig.get_paths()['include']}",
+    ]
+    result = subprocess.run(
+        ["c++", *FLAGS.split(), "-fsyntax-only", *includes, str(out / "cpp" / "bindings.cpp")],
+        capture_output=True,
+        text=True,
+    )
+    assert result.returncode == 0, result.stderr
