@@ -8,7 +8,14 @@ from __future__ import annotations
 
 import pytest
 
-from lessons.sandbox import Limits, SubmissionError, build_probe, run_probe
+from lessons.sandbox import (
+    Limits,
+    SubmissionError,
+    build_extension,
+    build_probe,
+    render_in_child,
+    run_probe,
+)
 from lessons.student import write_student_tree
 from tests.helpers import ROOT
 
@@ -106,3 +113,37 @@ def test_a_submission_without_core_files_is_refused(tmp_path):
     (tmp_path / "hw" / "essay.txt").write_text("I did not write any C++")
     with pytest.raises(SubmissionError, match="no C\\+\\+ file named as in tracer/cpp/"):
         build_probe(tmp_path / "hw", MAIN, tmp_path / "w")
+
+
+def reference_digest(scene) -> str:
+    """What the project's own build (tracer._core) renders, one ray at a time."""
+    import hashlib
+
+    from tracer.render import render_with_stats
+    from tracer.scene import load_scene
+
+    result = render_with_stats(load_scene(scene), threads=2, progress=False, packets=False)
+    return hashlib.sha256(result.image.tobytes()).hexdigest()
+
+
+def test_an_extension_built_from_a_tree_renders_or_says_not_implemented(tmp_path):
+    """One real build each way. An L08 tree holds the solution of every lesson the scene
+    needs: its extension, built by the sandbox and loaded only in a child process, renders
+    the Lambert scene bit for bit as the project's build does (-ffp-contract=off: no fused
+    multiply-add, so -O1 against -O3 changes no rounding). An L04 tree's render reaches a stub
+    (trace() of L07 comes first): exit status 86 and the function's name, never a signal."""
+    scene = ROOT / "reference" / "scenes" / "lambert.toml"
+    write_student_tree("L08", tmp_path / "tree08")
+    build = build_extension(tmp_path / "tree08", tmp_path / "w08")
+    assert build.outcome.ok, build.outcome.message
+    run = render_in_child(build, scene)
+    assert run.kind == "ok", (run.message, run.output[-2000:])
+    assert f"image sha256 {reference_digest(scene)} " in run.output
+
+    write_student_tree("L04", tmp_path / "tree04")
+    build = build_extension(tmp_path / "tree04", tmp_path / "w04")
+    assert build.outcome.ok, build.outcome.message
+    run = render_in_child(build, scene)
+    assert run.kind == "not_implemented" and run.returncode == 86, (run.message, run.output)
+    assert "not implemented: trace (lesson L07)" in run.message
+    assert "image sha256" not in run.output
