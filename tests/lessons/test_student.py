@@ -251,3 +251,21 @@ def test_a_trees_extension_source_compiles_against_nanobind(tmp_path):
         text=True,
     )
     assert result.returncode == 0, result.stderr
+
+
+def test_from_refuses_an_earlier_tree_with_broken_markers(tmp_path):
+    """A student who deleted an END SOLUTION line is told the file and the line, and no tree
+    is written."""
+    hw04 = tmp_path / "hw04"
+    write_student_tree("L04", hw04)
+    path = hw04 / "cpp" / "10_classic.h"
+    lines = path.read_text().split("\n")
+    first_end = lines.index("    // END SOLUTION")
+    del lines[first_end]
+    path.write_text("\n".join(lines))
+    with pytest.raises(StudentTreeError) as error:
+        write_student_tree("L05", tmp_path / "hw05", from_dir=hw04)
+    assert f"{path}:" in str(error.value) and "inside the region opened at line" in str(error.value)
+    assert not (tmp_path / "hw05").exists()
+    with pytest.raises(StudentTreeError, match="--from expects the directory"):
+        write_student_tree("L05", tmp_path / "hw05", from_dir=tmp_path / "missing")
