@@ -256,7 +256,23 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("check", help="validate a scene file without rendering")
     p.add_argument("scene", help="scene file (TOML)")
     p.set_defaults(func=cmd_check)
+
+    p = sub.add_parser("lesson", help="the course's lessons: list, show, student trees")
+    _add_lesson_arguments(p)
+    p.set_defaults(func=cmd_lesson)
     return parser
+
+
+def _add_lesson_arguments(parser: argparse.ArgumentParser) -> None:
+    from lessons.cli import add_arguments
+
+    add_arguments(parser)
+
+
+def cmd_lesson(args: argparse.Namespace) -> int:
+    from lessons.cli import run
+
+    return run(args)
 
 
 COMPARE_DESCRIPTION = """Render a scene with rtlab and the reference renderers, print the metrics

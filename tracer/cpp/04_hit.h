@@ -31,9 +31,13 @@ struct Facing {
 // interpolated normal may point away from the face it shades). RTIOW's set_face_normal, for a
 // shading normal and a geometric one (pbrt-v4's FaceForward of the shading frame).
 inline Facing face_the_ray(const Hit &hit, const Vec3 &d) {
+    // BEGIN SOLUTION L04
+    // PROMPT: Turn the geometric normal Ng against the incoming direction d (the side we see is the
+    // PROMPT: side we shade), then turn the shading normal N to Ng's side.
     Vec3 Ng = dot(hit.Ng, d) > 0 ? -hit.Ng : hit.Ng;
     Vec3 N = dot(hit.N, Ng) < 0 ? -hit.N : hit.N;
     return {N, Ng};
+    // END SOLUTION
 }
 
 // The rays that leave a hit (slide "What is a Ray?": secondary and shadow rays) all start just
@@ -55,13 +59,22 @@ struct ShadowRay {
 // Towards a point: the direction is left unnormalised, point - origin, so that the point sits
 // at t = 1 and what lies in (0, 1) is between (no square root, no division by the distance).
 inline ShadowRay shadow_ray_to(const Hit &hit, const Vec3 &Ng, const Vec3 &point) {
+    // BEGIN SOLUTION L05
+    // PROMPT: A shadow ray from the hit towards `point`: start it off the surface
+    // PROMPT: (offset_ray_origin), on the side it leaves to, and choose its direction and reach so
+    // PROMPT: that only what lies strictly between the surface and the point blocks the light.
     Vec3 o = offset_ray_origin(hit.p, hit.p_error, Ng, point - hit.p);
     return {{o, point - o}, 1.0};
+    // END SOLUTION
 }
 
 // Towards a light infinitely far along the unit `direction`: everything ahead is between.
 inline ShadowRay shadow_ray_towards(const Hit &hit, const Vec3 &Ng, const Vec3 &direction) {
+    // BEGIN SOLUTION L05
+    // PROMPT: A shadow ray towards a light infinitely far along the unit `direction`: where does it
+    // PROMPT: start, and how far does it reach?
     return {{offset_ray_origin(hit.p, hit.p_error, Ng, direction), direction}, infinity};
+    // END SOLUTION
 }
 
 // Counts of the three kinds of rays (slide "What is a Ray?") and of the tests they cost: how

@@ -36,6 +36,10 @@ struct SphereRoots {
 };
 
 inline SphereRoots sphere_roots(const Sphere &s, const Ray &ray) {
+    // BEGIN SOLUTION L02
+    // PROMPT: Solve a t^2 + 2 b t + c0 = 0 for the ray's line, with f = o - c, a = d.d,
+    // PROMPT: b = f.d, c0 = f.f - r^2. Return real = false when the line misses; otherwise both
+    // PROMPT: roots, t0 <= t1. Avoid the cancellation of b^2 - a c0 (see the top of this file).
     Vec3 f = ray.o - s.center;
     double a = dot(ray.d, ray.d);
     double b = dot(f, ray.d);
@@ -49,6 +53,7 @@ inline SphereRoots sphere_roots(const Sphere &s, const Ray &ray) {
     double t0 = c0 / q, t1 = q / a;
     if (t0 > t1) std::swap(t0, t1);
     return {true, t0, t1};
+    // END SOLUTION
 }
 
 // The five cases, for a ray whose parameters t count in `range` (t > 0 for a ray's forward half):
@@ -65,6 +70,9 @@ enum class SphereCase {
 // Which of the five cases the ray meets. Only for teaching and tests: intersect_sphere() below
 // needs no case analysis, it takes the nearest root in range.
 inline SphereCase sphere_case(const Sphere &s, const Ray &ray) {
+    // BEGIN SOLUTION L02
+    // PROMPT: Name which of the slide's five cases the ray meets: none, once (from inside),
+    // PROMPT: tangent, internal (the ray starts on the surface and runs inside), twice.
     SphereRoots roots = sphere_roots(s, ray);
     if (!roots.real) return SphereCase::none;
     Vec3 f = ray.o - s.center;
@@ -80,11 +88,15 @@ inline SphereCase sphere_case(const Sphere &s, const Ray &ray) {
     if (roots.t0 == roots.t1) return SphereCase::tangent;
     if (roots.t0 <= 0) return SphereCase::once_from_inside;
     return SphereCase::twice;
+    // END SOLUTION
 }
 
 // The nearest root within `range`, or infinity. (Finding the closest object needs only t;
 // the hit record is filled once, for the winner, by sphere_hit().)
 inline double sphere_t(const Sphere &s, const Ray &ray, const Interval &range) {
+    // BEGIN SOLUTION L02
+    // PROMPT: The nearest root t with range.min < t < range.max, or infinity when there is none. A
+    // PROMPT: root behind the ray, or at its own start, is not a hit.
     Vec3 f = ray.o - s.center;
     double b = dot(f, ray.d);
     double r2 = s.radius * s.radius;
@@ -102,6 +114,7 @@ inline double sphere_t(const Sphere &s, const Ray &ray, const Interval &range) {
     if (range.surrounds(t0)) return t0;
     if (range.surrounds(t1)) return t1;
     return infinity;
+    // END SOLUTION
 }
 
 // The hit record at parameter t, with the point moved exactly onto the sphere.

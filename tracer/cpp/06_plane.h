@@ -18,9 +18,13 @@ struct Plane {
 };
 
 inline double plane_t(const Plane &pl, const Ray &ray) {
+    // BEGIN SOLUTION L03
+    // PROMPT: Solve (o + t d - a).n = 0 for t. A ray parallel to the plane never meets it:
+    // PROMPT: infinity.
     double denom = dot(ray.d, pl.normal);
     if (denom == 0) return infinity; // the ray runs parallel to the plane
     return dot(pl.point - ray.o, pl.normal) / denom;
+    // END SOLUTION
 }
 
 // The hit record at parameter t.
@@ -41,10 +45,14 @@ inline void plane_hit(const Plane &pl, const Ray &ray, double t, Hit &hit) {
 }
 
 inline bool intersect_plane(const Plane &pl, const Ray &ray, const Interval &range, Hit &hit) {
+    // BEGIN SOLUTION L03
+    // PROMPT: Fill the hit record (plane_hit) and return true only when the plane's t lies in
+    // PROMPT: range.
     double t = plane_t(pl, ray);
     if (!range.surrounds(t)) return false;
     plane_hit(pl, ray, t, hit);
     return true;
+    // END SOLUTION
 }
 
 inline bool plane_blocks(const Plane &pl, const Ray &ray, const Interval &range) {

@@ -121,6 +121,9 @@ struct RayL {
 // square root are skipped (they cost more than all the rest).
 inline Lanes sphere_t(const Sphere &s, const RayL &ray, Lanes a, Lanes inv_a, Lanes max,
                       Mask active) {
+    // BEGIN SOLUTION L02
+    // PROMPT: The packet tracer's copy of 05_sphere.h sphere_t(), one ray per lane: not part of the
+    // PROMPT: exercise, hidden until lesson L02 is done (the lessons use the one-ray tracer).
     const Lanes inf = splat(infinity);
     Vec3L f = ray.o - splat(s.center);
     Lanes b = dot(f, ray.d);
@@ -137,14 +140,19 @@ inline Lanes sphere_t(const Sphere &s, const RayL &ray, Lanes a, Lanes inv_a, La
     Lanes lo = select(swap, t1, t0), hi = select(swap, t0, t1);
     Lanes t = select((lo > 0) & (lo < max), lo, select((hi > 0) & (hi < max), hi, inf));
     return select(away | (D < 0) | (q == 0), inf, t);
+    // END SOLUTION
 }
 
 // 06_plane.h plane_t(), per lane.
 inline Lanes plane_t(const Plane &pl, const RayL &ray) {
+    // BEGIN SOLUTION L03
+    // PROMPT: The packet tracer's copy of 06_plane.h plane_t(), one ray per lane: not part of the
+    // PROMPT: exercise, hidden until lesson L03 is done (the lessons use the one-ray tracer).
     Vec3L n = splat(pl.normal);
     Lanes denom = dot(ray.d, n);
     Lanes t = dot(splat(pl.point) - ray.o, n) / denom;
     return select(denom == 0, splat(infinity), t);
+    // END SOLUTION
 }
 
 // 09_scene.h closest_hit(): per lane the closest t and which object (kind 0 sphere, 1 plane).
@@ -284,13 +292,23 @@ struct FacingL {
     Vec3L N, Ng;
 };
 inline FacingL face_the_ray(const HitL &hit, const Vec3L &d) {
+    // BEGIN SOLUTION L04
+    // PROMPT: The packet tracer's copy of 04_hit.h face_the_ray(), one ray per lane: not part of
+    // PROMPT: the exercise, hidden until lesson L04 is done (the lessons use the one-ray tracer).
     Vec3L Ng = select(dot(hit.Ng, d) > 0, -hit.Ng, hit.Ng);
     Vec3L N = select(dot(hit.N, Ng) < 0, -hit.N, hit.N);
     return {N, Ng};
+    // END SOLUTION
 }
 
 // 10_classic.h reflect(), per lane.
-inline Vec3L reflect(const Vec3L &d, const Vec3L &N) { return d - N * (2 * dot(d, N)); }
+inline Vec3L reflect(const Vec3L &d, const Vec3L &N) {
+    // BEGIN SOLUTION L06
+    // PROMPT: The packet tracer's copy of 10_classic.h reflect(), one ray per lane: not part of the
+    // PROMPT: exercise, hidden until lesson L06 is done (the lessons use the one-ray tracer).
+    return d - N * (2 * dot(d, N));
+    // END SOLUTION
+}
 
 // 04_hit.h secondary_ray(), shadow_ray_to() and shadow_ray_towards(), and 10_classic.h
 // shadow_ray() and in_shadow(), per lane.
@@ -304,27 +322,44 @@ struct ShadowRayL {
 };
 
 inline ShadowRayL shadow_ray_to(const HitL &hit, const Vec3L &Ng, const Vec3 &point) {
+    // BEGIN SOLUTION L05
+    // PROMPT: The packet tracer's copy of 04_hit.h shadow_ray_to(), one ray per lane: not part of
+    // PROMPT: the exercise, hidden until lesson L05 is done (the lessons use the one-ray tracer).
     const Vec3L to = splat(point);
     Vec3L o = offset_ray_origin(hit.p, hit.p_error, Ng, to - hit.p);
     return {{o, to - o}, 1.0};
+    // END SOLUTION
 }
 
 inline ShadowRayL shadow_ray_towards(const HitL &hit, const Vec3L &Ng, const Vec3 &direction) {
+    // BEGIN SOLUTION L05
+    // PROMPT: The packet tracer's copy of 04_hit.h shadow_ray_towards(), one ray per lane: not part
+    // PROMPT: of the exercise, hidden until lesson L05 is done (the lessons use the one-ray
+    // PROMPT: tracer).
     const Vec3L d = splat(direction);
     return {{offset_ray_origin(hit.p, hit.p_error, Ng, d), d}, infinity};
+    // END SOLUTION
 }
 
 inline ShadowRayL shadow_ray(const HitL &hit, const Vec3L &Ng, const Light &light) {
+    // BEGIN SOLUTION L05
+    // PROMPT: The packet tracer's copy of 10_classic.h shadow_ray(), one ray per lane: not part of
+    // PROMPT: the exercise, hidden until lesson L05 is done (the lessons use the one-ray tracer).
     if (light.type == Light::Type::directional)
         return shadow_ray_towards(hit, Ng, -light.direction);
     return shadow_ray_to(hit, Ng, light.position);
+    // END SOLUTION
 }
 
 // The lanes of `active` whose shadow ray is blocked.
 inline Mask in_shadow(const Scene &scene, const ShadowRayL &shadow, Mask active,
                       RayCounts &counts) {
+    // BEGIN SOLUTION L05
+    // PROMPT: The packet tracer's copy of 10_classic.h in_shadow(), one ray per lane: not part of
+    // PROMPT: the exercise, hidden until lesson L05 is done (the lessons use the one-ray tracer).
     counts.shadow += uint64_t(count(active));
     return any_hit(scene, shadow.ray, splat(shadow.max_t), active, counts);
+    // END SOLUTION
 }
 
 // One turn of the loop of 10_classic.h trace(), for the rays of `active`: find the closest hit,
@@ -332,6 +367,10 @@ inline Mask in_shadow(const Scene &scene, const ShadowRayL &shadow, Mask active,
 // coef *= reflectivity and the ray becomes the secondary ray. Returns the lanes that go on.
 inline Mask trace_level(const Scene &scene, RayL &ray, Mask active, Lanes &coef, ColorL &color,
                         RayCounts &counts) {
+    // BEGIN SOLUTION L07
+    // PROMPT: The packet tracer's copy of one turn of the loop of 10_classic.h trace() with
+    // PROMPT: local_color(), one ray per lane (it restates lessons L04 to L07): not part of the
+    // PROMPT: exercise, hidden until lesson L07 is done (the lessons use the one-ray tracer).
     const Settings &s = scene.settings;
     ClosestL closest = closest_hit(scene, ray, active, counts);
     Mask found = active & (closest.t != infinity);
@@ -392,6 +431,7 @@ inline Mask trace_level(const Scene &scene, RayL &ray, Mask active, Lanes &coef,
     coef *= reflectivity;
     ray = secondary_ray(hit, f.Ng, R);
     return active;
+    // END SOLUTION
 }
 
 } // namespace rt
@@ -402,6 +442,9 @@ namespace rt {
 // still going into full packets at each level, as a wavefront, was tried: the gathering and
 // scattering cost more than the idle lanes it saves on these scenes.)
 inline ColorL trace(const Scene &scene, RayL ray, Mask active, RayCounts &counts) {
+    // BEGIN SOLUTION L07
+    // PROMPT: The packet tracer's copy of 10_classic.h trace(), one ray per lane: not part of the
+    // PROMPT: exercise, hidden until lesson L07 is done (the lessons use the one-ray tracer).
     const Settings &s = scene.settings;
     ColorL color{splat(0), splat(0), splat(0)};
     Lanes coef = splat(1.0);
@@ -412,6 +455,7 @@ inline ColorL trace(const Scene &scene, RayL ray, Mask active, RayCounts &counts
         active = trace_level(scene, ray, active, coef, color, counts);
     }
     return color;
+    // END SOLUTION
 }
 
 // 03_camera.h primary_ray() through the centres of pixels i0, i0 + 1, ... (one per lane) of

@@ -1,0 +1,76 @@
+"""``rtlab lesson list | show Lnn | student Lnn --out DIR [--from PREV]``: the verb's work (the
+parser lives in tracer/cli.py with the other verbs)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from lessons.catalog import LESSONS, UnknownLessonError, get_lesson
+from lessons.markers import MarkerError
+from lessons.student import StudentTreeError, write_student_tree
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    sub = parser.add_subparsers(dest="lesson_command", required=True)
+    sub.add_parser("list", help="the lessons in lecture order, with the concepts each checks")
+    p = sub.add_parser("show", help="a lesson's text in the terminal")
+    p.add_argument("lesson", help="a lesson id, e.g. L04")
+    p = sub.add_parser("student", help="write a student's starting tree for a lesson")
+    p.add_argument("lesson", help="a lesson id, e.g. L04")
+    p.add_argument("--out", required=True, help="the directory to create (new or empty)")
+    p.add_argument(
+        "--from",
+        dest="from_dir",
+        help="an earlier tree of the student's: its code of the earlier lessons is carried over",
+    )
+
+
+def cmd_list() -> int:
+    for lesson in LESSONS:
+        print(f"{lesson.id}  {lesson.title}")
+        print(f"     slide: {lesson.slide}")
+        print(f"     writes: {lesson.writes}")
+        print(f"     checks: {'; '.join(lesson.concepts)}")
+    return 0
+
+
+def cmd_show(lesson_id: str) -> int:
+    lesson = get_lesson(lesson_id)
+    if not lesson.text_path.exists():
+        print(f"{lesson.id}: {lesson.title}\n\n(this lesson has no text yet)")
+        return 0
+    print(lesson.text_path.read_text(), end="")
+    return 0
+
+
+def cmd_student(lesson_id: str, out: str, from_dir: str | None) -> int:
+    report = write_student_tree(lesson_id, Path(out), Path(from_dir) if from_dir else None)
+    report.stubbed.sort(key=lambda r: (r.file, r.begin))
+    names = ", ".join(
+        f"{r.function}()" for r in report.stubbed if r.lesson == lesson_id and not r.is_copy
+    )
+    print(f"rtlab: wrote {out}: lesson {lesson_id}, you write {names}")
+    later = sorted({r.lesson for r in report.stubbed if r.lesson != lesson_id})
+    if later:
+        print(f"rtlab: later lessons stubbed too: {', '.join(later)}")
+    if report.carried:
+        print(f"rtlab: carried your own code of {len(report.carried)} functions from {from_dir}")
+        stubs = [r for r in report.carried if any("not_implemented(" in b for b in r.body)]
+        for r in sorted(stubs, key=lambda r: (r.lesson, r.file, r.begin)):
+            print(f"rtlab: warning: {r.function}() of {r.lesson} is still a stub in {r.file}")
+    return 0
+
+
+def run(args: argparse.Namespace) -> int:
+    """Exit status: 0 done; 2 bad input (an unknown lesson, an output that exists, bad markers)."""
+    try:
+        if args.lesson_command == "list":
+            return cmd_list()
+        if args.lesson_command == "show":
+            return cmd_show(args.lesson)
+        return cmd_student(args.lesson, args.out, args.from_dir)
+    except (UnknownLessonError, StudentTreeError, MarkerError) as error:
+        print(f"rtlab: error: {error}", file=sys.stderr)
+        return 2

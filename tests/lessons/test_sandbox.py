@@ -1,0 +1,149 @@
+"""The sandbox (lessons/sandbox.py) against real hostile submissions: each is built and run in
+a child process under limits and answered in words: a compile error with the compiler's first
+errors, an infinite loop as a hang with its limit, a segfault as a crash naming SIGSEGV, a
+1 GiB allocation as out of memory, a printf flood cut at the limit, a stub as not implemented.
+The solution itself passes."""
+
+from __future__ import annotations
+
+import pytest
+
+from lessons.sandbox import (
+    Limits,
+    SubmissionError,
+    build_extension,
+    build_probe,
+    render_in_child,
+    run_probe,
+)
+from lessons.student import write_student_tree
+from tests.helpers import ROOT
+
+CLASSIC = (ROOT / "tracer" / "cpp" / "10_classic.h").read_text()
+SOLUTION = "    return dot(N, L);\n"
+
+# A probe: call the student's lambert_term() once and print what it returns.
+MAIN = r"""
+#include <cstdio>
+#include "10_classic.h"
+int main() {
+    std::printf("lambert_term = %.17g\n", rt::lambert_term({0, 0, 1}, {0.6, 0, 0.8}));
+    return 0;
+}
+"""
+
+HOSTILE = {
+    "compile_error": "    return dot(N, L)\n",  # the missing semicolon
+    "hang": "    volatile double x = 0;\n    while (x >= 0) x = x + 1;\n    return x;\n",
+    "crash": "    int *volatile p = nullptr;\n    return *p;\n",
+    "memory": "    std::vector<char> big(size_t(1) << 30, 1);\n    return big[12345];\n",
+    "flood": '    for (;;) std::printf("N.L is %g\\n", dot(N, L));\n',
+}
+
+
+def submit(tmp_path, body: str):
+    text = CLASSIC.replace(SOLUTION, body)
+    assert text != CLASSIC, "the injection changed nothing"
+    text = text.replace("#pragma once\n", "#pragma once\n#include <cstdio>\n#include <vector>\n")
+    hw = tmp_path / "hw"
+    hw.mkdir()
+    (hw / "10_classic.h").write_text(text)
+    return hw
+
+
+# Short limits, so the test is quick: a probe of one function needs milliseconds of CPU.
+QUICK = Limits(cpu_s=2, wall_s=10, output_bytes=4096)
+
+
+def test_the_solution_builds_and_answers(tmp_path):
+    build = build_probe(submit(tmp_path, SOLUTION + "    // mine\n"), MAIN, tmp_path / "w")
+    assert build.outcome.ok, build.outcome.output
+    assert build.files == ["10_classic.h"]
+    run = run_probe(build, [], QUICK)
+    assert run.kind == "ok" and run.output == "lambert_term = 0.80000000000000004\n"
+
+
+@pytest.mark.parametrize("kind", HOSTILE, ids=list(HOSTILE))
+def test_a_hostile_submission_is_answered_clearly(kind, tmp_path):
+    build = build_probe(submit(tmp_path, HOSTILE[kind]), MAIN, tmp_path / "w")
+    if kind == "compile_error":
+        assert build.outcome.kind == "compile_error" and build.binary is None
+        assert "10_classic.h" in build.outcome.message and "error:" in build.outcome.message
+        assert "expected ';'" in build.outcome.message
+        return
+    assert build.outcome.ok, build.outcome.output
+    run = run_probe(build, [], QUICK)
+    assert run.kind == kind, (run.kind, run.message, run.output[:500])
+    expected = {
+        "hang": "did not finish within 2 s of CPU",
+        "crash": "crashed: SIGSEGV",
+        "memory": "ran out of memory (the limit is 512 MiB)",
+        "flood": "wrote more than 4 KiB of output",
+    }[kind]
+    assert expected in run.message
+    if kind == "flood":
+        assert len(run.output.encode()) == 4096 and run.output.startswith("N.L is 0.8\n")
+    assert run.seconds < 10  # (QUICK's wall clock: the limit ended it, not the test's patience)
+
+
+def test_a_wall_clock_hang_is_killed(tmp_path):
+    """A submission that sleeps uses no CPU: the wall-clock limit must end it."""
+    body = "    std::this_thread::sleep_for(std::chrono::hours(1));\n    return 0;\n"
+    hw = submit(tmp_path, body)
+    path = hw / "10_classic.h"
+    path.write_text(path.read_text().replace("#include <cstdio>", "#include <thread>"))
+    build = build_probe(hw, MAIN, tmp_path / "w")
+    assert build.outcome.ok, build.outcome.output
+    run = run_probe(build, [], Limits(cpu_s=2, wall_s=1.5))
+    assert run.kind == "hang" and "1.5 s wall clock" in run.message
+
+
+def test_a_stub_is_not_implemented(tmp_path):
+    tree = tmp_path / "tree"
+    write_student_tree("L04", tree)
+    build = build_probe(tree, MAIN, tmp_path / "w")
+    assert build.outcome.ok, build.outcome.output
+    run = run_probe(build, [], QUICK)
+    assert run.kind == "not_implemented"
+    assert "not implemented: lambert_term (lesson L04)" in run.message
+
+
+def test_a_submission_without_core_files_is_refused(tmp_path):
+    (tmp_path / "hw").mkdir()
+    (tmp_path / "hw" / "essay.txt").write_text("I did not write any C++")
+    with pytest.raises(SubmissionError, match="no C\\+\\+ file named as in tracer/cpp/"):
+        build_probe(tmp_path / "hw", MAIN, tmp_path / "w")
+
+
+def reference_digest(scene) -> str:
+    """What the project's own build (tracer._core) renders, one ray at a time."""
+    import hashlib
+
+    from tracer.render import render_with_stats
+    from tracer.scene import load_scene
+
+    result = render_with_stats(load_scene(scene), threads=2, progress=False, packets=False)
+    return hashlib.sha256(result.image.tobytes()).hexdigest()
+
+
+def test_an_extension_built_from_a_tree_renders_or_says_not_implemented(tmp_path):
+    """One real build each way. An L08 tree holds the solution of every lesson the scene
+    needs: its extension, built by the sandbox and loaded only in a child process, renders
+    the Lambert scene bit for bit as the project's build does (-ffp-contract=off: no fused
+    multiply-add, so -O1 against -O3 changes no rounding). An L04 tree's render reaches a stub
+    (trace() of L07 comes first): exit status 86 and the function's name, never a signal."""
+    scene = ROOT / "reference" / "scenes" / "lambert.toml"
+    write_student_tree("L08", tmp_path / "tree08")
+    build = build_extension(tmp_path / "tree08", tmp_path / "w08")
+    assert build.outcome.ok, build.outcome.message
+    run = render_in_child(build, scene)
+    assert run.kind == "ok", (run.message, run.output[-2000:])
+    assert f"image sha256 {reference_digest(scene)} " in run.output
+
+    write_student_tree("L04", tmp_path / "tree04")
+    build = build_extension(tmp_path / "tree04", tmp_path / "w04")
+    assert build.outcome.ok, build.outcome.message
+    run = render_in_child(build, scene)
+    assert run.kind == "not_implemented" and run.returncode == 86, (run.message, run.output)
+    assert "not implemented: trace (lesson L07)" in run.message
+    assert "image sha256" not in run.output
