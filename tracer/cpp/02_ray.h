@@ -20,7 +20,12 @@ namespace rt {
 struct Ray {
     Vec3 o; // origin
     Vec3 d; // direction: unit length for primary and secondary rays
-    Vec3 at(double t) const { return o + t * d; }
+    Vec3 at(double t) const {
+        // BEGIN SOLUTION L01
+        // PROMPT: The point p = o + t d at parameter t along the ray.
+        return o + t * d;
+        // END SOLUTION
+    }
 };
 
 // The open interval (min, max) of ray parameters t that count as a hit.

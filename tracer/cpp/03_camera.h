@@ -32,22 +32,34 @@ struct Camera {
     double plane_height = 0, plane_width = 0;
 
     void initialize() {
+        // BEGIN SOLUTION L01
+        // PROMPT: The camera's frame: the unit vectors forward (towards look_at), right
+        // PROMPT: (forward x up: right-handed) and true_up (perpendicular to both), and the
+        // PROMPT: image plane's height and width at distance 1 for the vertical field of view
+        // PROMPT: fov_y (in degrees) and the image's aspect width / height.
         forward = normalize(look_at - eye);
         right = normalize(cross(forward, up));
         true_up = cross(right, forward);
         plane_height = 2 * std::tan(fov_y * pi / 360.0); // half the angle, in radians
         plane_width = plane_height * width / height;
+        // END SOLUTION
     }
 
     // A primary ray through the image-plane point (sx, sy) given in pixel units, where
     // (i + 0.5, j + 0.5) is the centre of pixel (i, j).
     Ray primary_ray(double sx, double sy) const {
+        // BEGIN SOLUTION L01
+        // PROMPT: The unit-direction ray from the eye through the image-plane point (sx, sy),
+        // PROMPT: in pixel units with row 0 at the top: x = sx / width - 0.5 and
+        // PROMPT: y = 0.5 - sy / height, scaled to the plane's size, along right and true_up;
+        // PROMPT: the window moves by window_shift along right (0 but for a stereo eye).
         double x = sx / width - 0.5;
         double y = 0.5 - sy / height;
         // x * plane_width + 0 is x * plane_width exactly (x is never -0), so a single camera's
         // rays are what they were before stereo pairs existed, bit for bit.
         Vec3 d = forward + (x * plane_width + window_shift) * right + (y * plane_height) * true_up;
         return {eye, normalize(d)};
+        // END SOLUTION
     }
 };
 

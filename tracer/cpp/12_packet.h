@@ -461,6 +461,9 @@ inline ColorL trace(const Scene &scene, RayL ray, Mask active, RayCounts &counts
 // 03_camera.h primary_ray() through the centres of pixels i0, i0 + 1, ... (one per lane) of
 // row j.
 inline RayL primary_rays(const Camera &cam, int i0, int j) {
+    // BEGIN SOLUTION L01
+    // PROMPT: The packet tracer's copy of 03_camera.h primary_ray(), one ray per lane: not part
+    // PROMPT: of the exercise, hidden until lesson L01 is done (the lessons use the one-ray tracer).
     Lanes sx;
     for (int k = 0; k < rays_per_packet; ++k) sx[k] = (i0 + k) + 0.5;
     Lanes x = sx / double(cam.width) - 0.5;
@@ -468,6 +471,7 @@ inline RayL primary_rays(const Camera &cam, int i0, int j) {
     Vec3L d = splat(cam.forward) + splat(cam.right) * (x * cam.plane_width + cam.window_shift) +
               splat(cam.true_up * (y * cam.plane_height));
     return {splat(cam.eye), normalize(d)};
+    // END SOLUTION
 }
 
 inline void store_pixels(float *out, int width, int i0, int j, int n, const ColorL &c) {
