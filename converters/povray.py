@@ -34,7 +34,6 @@ from tracer.scene import (
     PointLight,
     Quad,
     Scene,
-    SceneError,
     Sphere,
     Torus,
     Triangle,
@@ -42,6 +41,7 @@ from tracer.scene import (
     to_world,
     triangles,
 )
+from tracer.scene.placement import one_eye
 from tracer.scene.vectors import cross, sub, unit
 
 
@@ -73,19 +73,11 @@ def _camera(scene: Scene) -> list[str]:
             f"  look_at {_vec(cam.look_at)}",
             "}",
         ]
-    if cam.stereo.layout not in ("left", "right"):
-        raise SceneError(
-            scene.source,
-            "camera.stereo.layout",
-            "expected 'left' or 'right' (POV-Ray renders one eye at a time: convert each eye "
-            "alone, tracer.render.eye_scene), "
-            f"got {cam.stereo.layout!r}",
-        )
     # One eye of a stereo pair (tracer/cpp/03_camera.h stereo_eye()). POV-Ray's perspective
     # ray is direction + x right + y up, x and y from -1/2 to 1/2 (pixel centres with -A): with
     # the vectors given in world space and no look_at or angle to re-aim them, a direction with
     # a component along right is the shifted, off-axis window itself.
-    eye, look_at, shift = cam.one_eye()
+    eye, look_at, shift = one_eye(scene, "POV-Ray renders one eye at a time")
     forward = unit(sub(look_at, eye))
     right = unit(cross(forward, cam.up))
     up = cross(right, forward)

@@ -27,7 +27,6 @@ from tracer.scene import (
     Plane,
     PointLight,
     Scene,
-    SceneError,
     Sphere,
     Torus,
     cylinder_height,
@@ -36,6 +35,7 @@ from tracer.scene import (
     to_world,
     triangles,
 )
+from tracer.scene.placement import one_eye
 
 #: Planes become Mitsuba disks of this many scene sizes in radius, centred below the camera: a
 #: ray must pass within ~1/PLANE_SCALE radians of the horizon to miss one, far below a pixel's
@@ -120,20 +120,12 @@ def _sensor(scene: Scene, sampler: dict[str, Any]) -> dict[str, Any]:
     cam = scene.camera
     eye, look_at, stereo = cam.eye, cam.look_at, {}
     if cam.stereo is not None:
-        if cam.stereo.layout not in ("left", "right"):
-            raise SceneError(
-                scene.source,
-                "camera.stereo.layout",
-                "expected 'left' or 'right' (Mitsuba's sensor is one eye: convert each eye alone, "
-                "tracer.render.eye_scene), "
-                f"got {cam.stereo.layout!r}",
-            )
         # One eye of a stereo pair (tracer/cpp/03_camera.h stereo_eye()): the eye moved, its
         # window shifted. Mitsuba's principal point offset is a fraction of the film's width,
         # positive moving the window to the image's right, as rtlab's shift (found by rendering:
         # the opposite sign puts 15% of the pixels over tolerance; the fraction of the height
         # instead of the width would miss by a pixel; tests/reference/test_stereo_references.py).
-        eye, look_at, shift = cam.one_eye()
+        eye, look_at, shift = one_eye(scene, "Mitsuba's sensor is one eye")
         plane_width = 2 * math.tan(math.radians(cam.fov_y) / 2) * cam.width / cam.height
         stereo = {"principal_point_offset_x": shift / plane_width}
     return {

@@ -25,6 +25,24 @@ from tracer.scene.vectors import Vec3, norm, sub, unit
 if TYPE_CHECKING:  # scene_extent reads a whole scene; the scene's reading builds on placement
     from tracer.scene.document import Scene
 
+
+def one_eye(scene: Scene, renderer: str) -> tuple[Vec3, Vec3, float]:
+    """The eye, look_at and window shift of a one-eye stereo scene (Camera.one_eye()), for a
+    converter whose renderer draws one camera per render; a layout that needs both eyes in one
+    image is refused, naming the key and why (``renderer`` says how that renderer works)."""
+    from tracer.scene.errors import SceneError
+
+    layout = scene.camera.stereo.layout if scene.camera.stereo is not None else None
+    if layout not in ("left", "right"):
+        raise SceneError(
+            scene.source,
+            "camera.stereo.layout",
+            f"expected 'left' or 'right' ({renderer}: convert each eye alone, "
+            f"tracer.render.eye_scene), got {layout!r}",
+        )
+    return scene.camera.one_eye()
+
+
 #: A frame's x axis comes from crossing the world x axis with its z axis, unless that z axis is
 #: within ~26 degrees of x (|z.x| >= 0.9, where the cross product would lose digits); then from
 #: the world y axis.
