@@ -76,11 +76,11 @@ class Result:
 
     @property
     def score(self) -> float:
-        return round(sum(t.score for t in self.tests), 4)
+        return round(sum(round(t.score, 4) for t in self.tests), 4)
 
     @property
     def max_score(self) -> float:
-        return round(sum(t.max_score for t in self.tests), 4)
+        return round(sum(round(t.max_score, 4) for t in self.tests), 4)
 
     def as_gradescope(self) -> dict:
         output = "\n\n".join([self.diagnosis, *self.notes]).strip()
@@ -100,6 +100,10 @@ class Result:
 
         with atomic_path(path) as tmp:
             tmp.write_text(json.dumps(self.as_gradescope(), indent=2) + "\n")
+
+
+class NoChecksError(ValueError):
+    """A lesson that has no checks yet."""
 
 
 # --- the lessons' checks -----------------------------------------------------------------
@@ -359,7 +363,7 @@ def diagnose(lesson: str, tests: list[TestResult], depends: dict[str, tuple[str,
         return f"{lesson} ({info.title}): all {len(mine)} checks pass."
     kinds = {t.kind for t in failed}
     if kinds == {"compile_error"}:
-        return f"{lesson}: your code does not compile.\n\n{failed[0].output}"
+        return f"{lesson}: {failed[0].output[0].lower()}{failed[0].output[1:]}"
     if "not_implemented" in kinds and all(t.kind == "not_implemented" for t in mine):
         functions = sorted({t.function for t in mine})
         return (
@@ -509,7 +513,7 @@ def grade(submission: str | Path, lesson: str | None = None) -> Result:
     if lesson is not None:
         get_lesson(lesson)  # an unknown id is the caller's error: UnknownLessonError
         if lesson not in lessons_with_checks():
-            raise ValueError(
+            raise NoChecksError(
                 f"{lesson}: no checks yet; graded lessons: {', '.join(lessons_with_checks())}"
             )
     result = Result(lessons=[lesson] if lesson else [])
