@@ -208,3 +208,23 @@ def test_a_submission_without_its_markers_is_graded_not_implemented(tmp_path: Pa
     result = grade(tmp_path / "sub", lesson="L03")
     assert result.score == 0
     assert any("markers are broken" in note for note in result.notes)
+
+
+def test_grading_one_lesson_takes_only_its_regions(tmp_path: Path) -> None:
+    # One mistake is charged once: a sphere that does not even compile (L02) and a wrong plane
+    # (L03) leave the grade of L04 untouched, and L03's grade names only the plane.
+    sub = tmp_path / "sub"
+    write_mistake(next(m for m in mistakes("L03") if m.name == "sign_of_a_minus_o"), sub)
+    shutil.copyfile(CORE / "10_classic.h", sub / "10_classic.h")
+    shutil.copyfile(CORE / "04_hit.h", sub / "04_hit.h")
+    sphere = (CORE / "05_sphere.h").read_text()
+    broken = sphere.replace(
+        "    double a = dot(ray.d, ray.d);\n", "    double a = dot(ray.d);\n", 1
+    )
+    assert broken != sphere
+    (sub / "05_sphere.h").write_text(broken)
+    l04 = grade(sub, lesson="L04")
+    assert l04.score == l04.max_score
+    l03 = grade(sub, lesson="L03")
+    assert l03.diagnosis.startswith("L03: wrong: the plane (p - a).n = 0")
+    assert grade(sub).lessons == ["L02", "L03"]
