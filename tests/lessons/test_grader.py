@@ -20,7 +20,7 @@ from lessons.markers import parse
 from lessons.mistakes import Mistake, mistakes, mutated_text, write_mistake
 from lessons.student import CORE, write_student_tree
 
-GRADED = ("L02", "L03", "L04")
+GRADED = ("L02", "L03", "L04", "L06")
 MISTAKES = [m for lesson in GRADED for m in mistakes(lesson)]
 
 
