@@ -156,6 +156,12 @@ def test_a_hostile_submission_gives_a_clear_results_file(
         # Charged to the probe that ran (o.z > -2), not to those before it: a probe from
         # o.z = -3 passes.
         assert data["tests"][0]["status"] == "passed"
+        first = data["tests"].index(caught[0])
+        later = data["tests"][first + 1 :]
+        if name == "crash":  # the program went on after it: a later probe ran and passed
+            assert any(t["status"] == "passed" for t in later)
+        else:  # two hangs cost their limits; the rest are not run (MAX_HANGS)
+            assert "not run: 2 checks before it hung" in later[-1]["output"]
 
 
 @pytest.mark.parametrize("what", ["empty", "not_cpp", "missing"])
