@@ -1,5 +1,5 @@
-"""``rtlab lesson list | show Lnn | student Lnn --out DIR [--from PREV]``: the verb's work (the
-parser lives in tracer/cli.py with the other verbs)."""
+"""``rtlab lesson list | show Lnn | student Lnn --out DIR [--from PREV] | grade DIR``: the
+verb's work (the parser lives in tracer/cli.py with the other verbs)."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from lessons.catalog import LESSONS, UnknownLessonError, get_lesson
+from lessons.grader import NoChecksError
 from lessons.markers import MarkerError
 from lessons.student import StudentTreeError, write_student_tree
 
@@ -25,6 +26,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         dest="from_dir",
         help="an earlier tree of the student's: its code of the earlier lessons is carried over",
     )
+    p = sub.add_parser("grade", help="grade a submission: probes of the lesson's concepts")
+    p.add_argument("submission", help="a directory of C++ files named as in tracer/cpp/")
+    p.add_argument(
+        "--lesson", help="the lesson to grade (default: every lesson the submission's files touch)"
+    )
+    p.add_argument("--json", dest="json_path", help="write Gradescope's results.json here")
 
 
 def cmd_list() -> int:
@@ -63,6 +70,27 @@ def cmd_student(lesson_id: str, out: str, from_dir: str | None) -> int:
     return 0
 
 
+def cmd_grade(submission: str, lesson: str | None, json_path: str | None) -> int:
+    """Print the diagnosis and the score; write results.json (always, also for an empty or a
+    broken submission). Exit status 0 whatever the score: grading worked."""
+    from lessons.grader import grade
+
+    if lesson is not None:
+        lesson = get_lesson(lesson).id
+    result = grade(Path(submission), lesson)
+    if json_path:
+        result.write(json_path)
+    print(result.diagnosis)
+    for note in result.notes:
+        print(f"note: {note}")
+    print(
+        f"rtlab: {', '.join(result.lessons)}: score {result.score:g} of {result.max_score:g} "
+        f"({sum(t.status == 'passed' for t in result.tests)} of {len(result.tests)} checks pass)"
+        + (f"; wrote {json_path}" if json_path else "")
+    )
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
     """Exit status: 0 done; 2 bad input (an unknown lesson, an output that exists, bad markers)."""
     try:
@@ -70,7 +98,9 @@ def run(args: argparse.Namespace) -> int:
             return cmd_list()
         if args.lesson_command == "show":
             return cmd_show(args.lesson)
+        if args.lesson_command == "grade":
+            return cmd_grade(args.submission, args.lesson, args.json_path)
         return cmd_student(args.lesson, args.out, args.from_dir)
-    except (UnknownLessonError, StudentTreeError, MarkerError) as error:
+    except (UnknownLessonError, StudentTreeError, MarkerError, NoChecksError) as error:
         print(f"rtlab: error: {error}", file=sys.stderr)
         return 2
