@@ -289,6 +289,13 @@ def _expected_text(e: object) -> str:
 
 def _probe_test(probe: Probe, points: float, kind: str, detail: str) -> TestResult:
     head = f"**Inputs**: {probe.inputs_text}\n\n"
+
+    def failed(text: str, why: str) -> TestResult:
+        return TestResult(
+            probe.name, probe.lesson, probe.concept, 0.0, points, "failed", text,
+            probe.visibility, probe.function, why,
+        )  # fmt: skip
+
     if kind == "result":
         got = _got(detail)
         wrong = (
@@ -318,34 +325,12 @@ def _probe_test(probe: Probe, points: float, kind: str, detail: str) -> TestResu
             + "\n".join(f"- {w}" for w in wrong)
             + f"\n\nExpected: {expected}.\n\nHint: {probe.hint}."
         )
-        return TestResult(
-            probe.name,
-            probe.lesson,
-            probe.concept,
-            0.0,
-            points,
-            "failed",
-            text,
-            probe.visibility,
-            probe.function,
-            "probe",
-        )
+        return failed(text, "probe")
     if kind == "not_implemented":
         text = head + f"{detail.strip().removeprefix('rtlab: ')}."
     else:
         text = head + f"{WHAT.get(kind, kind)}: {detail.strip()} (in `{probe.function}()`)."
-    return TestResult(
-        probe.name,
-        probe.lesson,
-        probe.concept,
-        0.0,
-        points,
-        "failed",
-        text,
-        probe.visibility,
-        probe.function,
-        kind,
-    )
+    return failed(text, kind)
 
 
 # --- the diagnosis -----------------------------------------------------------------------
