@@ -19,6 +19,11 @@ from dataclasses import dataclass, field
 from decimal import Decimal, localcontext
 from fractions import Fraction
 
+Vec = tuple[float, float, float]  # a point or direction, as the checks write them
+XYZ = ("x", "y", "z")  # labels of a vector's components in a probe's expected values
+RGB = ("r", "g", "b")  # labels of a colour's components
+HIDDEN = "after_published"  # a hidden variant's visibility (Gradescope's word)
+
 # The unit roundoff of double, 2^-53.
 U = 2.0**-53
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 from fractions import Fraction
 
-from lessons.probe import Probe, dot, sqrt_fraction, sub, to_float, vec_text
+from lessons.probe import HIDDEN, Probe, Vec, dot, sqrt_fraction, sub, to_float, vec_text
 
 LESSON = "L02"
 ROOTS = "the roots of the quadratic"
@@ -23,8 +23,6 @@ CASES = "the five cases: none, once, tangent, internal, twice"
 # A concept whose probes run code of another: its failures may follow from that one's.
 DEPENDS = {NEAREST: (ROOTS,), CASES: (ROOTS,)}
 CASE_NAMES = ("none", "once_from_inside", "tangent", "internal", "twice")
-
-Vec = tuple[float, float, float]
 
 
 def _exact_roots(
@@ -154,7 +152,7 @@ Z: Vec = (0.0, 0.0, 1.0)
 
 
 def probes() -> list[Probe]:
-    hidden = "after_published"
+    hidden = HIDDEN
     return [
         roots_probe("roots: a ray through the centre, twice", ORIGIN, 1, (0, 0, -3), Z),
         roots_probe("roots: a direction of length 2 (a = d.d)", ORIGIN, 1, (0, 0, -3), (0, 0, 2)),

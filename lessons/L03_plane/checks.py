@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 
-from lessons.probe import Probe, dot, sub, to_float, vec_text
+from lessons.probe import HIDDEN, Probe, Vec, dot, sub, to_float, vec_text
 
 LESSON = "L03"
 PLANE = "the plane (p - a).n = 0"
@@ -18,7 +18,6 @@ PARALLEL = "a ray parallel to the plane"
 IN_RANGE = "the hit in range"
 DEPENDS = {IN_RANGE: (PLANE,), PARALLEL: ()}
 
-Vec = tuple[float, float, float]
 Y: Vec = (0.0, 1.0, 0.0)
 ORIGIN: Vec = (0.0, 0.0, 0.0)
 
@@ -90,7 +89,7 @@ def hit_probe(
 
 
 def probes() -> list[Probe]:
-    hidden = "after_published"
+    hidden = HIDDEN
     tilted = (0.0, 0.6, 0.8)
     return [
         t_probe("plane: straight down onto the floor", PLANE, ORIGIN, Y, (0, 2, 0), (0, -1, 0)),

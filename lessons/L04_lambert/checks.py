@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 from fractions import Fraction
 
-from lessons.probe import Probe, dot, vec_text
+from lessons.probe import HIDDEN, RGB, XYZ, Probe, Vec, dot, vec_text
 
 LESSON = "L04"
 AMBIENT = "ambient light"
@@ -22,11 +22,6 @@ TO_LIGHT = "the direction to the light L"
 FACING = "the normal facing the ray"
 COLOURED = "coloured lights"
 DEPENDS: dict[str, tuple[str, ...]] = {}
-
-Vec = tuple[float, float, float]
-RGB = ("r", "g", "b")
-XYZ = ("x", "y", "z")
-HIDDEN = "after_published"
 
 
 def ambient_probe(

@@ -13,16 +13,12 @@ import math
 from decimal import Decimal, localcontext
 from fractions import Fraction
 
-from lessons.probe import Probe, dot, vec_text
+from lessons.probe import HIDDEN, XYZ, Probe, Vec, dot, vec_text
 
 LESSON = "L06"
 MIRROR = "the mirror vector R = 2(N.L)N - L"
 PHONG = "the Phong highlight"
 DEPENDS: dict[str, tuple[str, ...]] = {}
-
-Vec = tuple[float, float, float]
-XYZ = ("x", "y", "z")
-HIDDEN = "after_published"
 
 
 def reflect_probe(name: str, d: Vec, n: Vec, visibility: str = "visible") -> Probe:
