@@ -31,6 +31,7 @@ from lessons.student import CORE, STUB_HEADER, _submitted_files, _with_include, 
 
 HERE = Path(__file__).resolve().parent
 PROBE_MAIN = HERE / "cpp" / "probe_main.cpp"
+PROBE_COMMON = HERE / "cpp" / "probe.h"
 CONCEPT_POINTS = 10.0
 # A probe is one call of a small function: microseconds. 2 s of CPU is a hang; 5 s of wall
 # clock covers a loaded machine; 512 MiB and 64 KiB as the sandbox's defaults argue.
@@ -116,6 +117,16 @@ def lessons_with_checks() -> list[str]:
 def _checks(lesson: str):  # noqa: ANN202 - the lesson's checks module
     info = get_lesson(lesson)
     return importlib.import_module(f"lessons.{info.id}_{info.name}.checks")
+
+
+def probe_source(lessons: list[str]) -> str:
+    """The probe program's source for these lessons: lessons/cpp/probe.h, each lesson's
+    probes.h (RT_PROBE(function) {...}), lessons/cpp/probe_main.cpp, one after the other, with
+    #line so that an error names the file it is in."""
+    own = [BY_ID[i].folder / "probes.h" for i in lessons]
+    parts = [PROBE_COMMON, *(p for p in own if p.exists()), PROBE_MAIN]
+    root = HERE.parent
+    return "".join(f'#line 1 "{path.relative_to(root)}"\n{path.read_text()}\n' for path in parts)
 
 
 def lesson_probes(lesson: str) -> list[Probe]:
@@ -432,7 +443,7 @@ def grade_lesson(
         for name, text in spliced.files.items():
             (own / name).write_text(text)
         (own / STUB_HEADER).write_text((HERE / "cpp" / STUB_HEADER).read_text())
-        build = build_probe(own, PROBE_MAIN.read_text(), work / "build")
+        build = build_probe(own, probe_source([lesson]), work / "build")
         if not build.outcome.ok:
             kind = build.outcome.kind
             text = build.outcome.message
