@@ -113,12 +113,23 @@ def cmd_render(args: argparse.Namespace) -> None:
     _render_to(scene, [Path(args.output)], args)
 
 
-def cmd_demo(args: argparse.Namespace) -> None:
+def _agreement_status(rows: list[dict]) -> int:
+    """1 (and why, on stderr) when a reference disagrees with rtlab, else 0: the exit status of
+    compare and demo."""
+    disagree = [r for r in rows if r.get("agrees") is False]
+    for r in disagree:
+        print(f"rtlab: {r['renderer']} disagrees with rtlab: {r['verdict']}", file=sys.stderr)
+    if disagree:
+        print("rtlab: exit status 1: the renderers disagree", file=sys.stderr)
+    return 1 if disagree else 0
+
+
+def cmd_demo(args: argparse.Namespace) -> int:
     scene = _apply_overrides(load_scene(demo_scene_path()), args)
     out = Path(args.out_dir)
     if args.rtlab_only:
         _render_to(scene, [out / "ex25-rtlab.png", out / "ex25-rtlab.exr"], args)
-        return
+        return 0
     from reference.compare import REFERENCES, compare_scene, format_table
 
     rows = compare_scene(scene, REFERENCES, out_dir=out, json_path=out / "ex25-metrics.json",
@@ -126,6 +137,7 @@ def cmd_demo(args: argparse.Namespace) -> None:
     print(format_table(rows))
     print(f"images: {out}/ex25-rtlab.png (rtlab), ex25-povray.png, ex25-mitsuba-*.png;")
     print(f"heat maps: {out}/ex25-diff-*.png; metrics: {out}/ex25-metrics.json")
+    return _agreement_status(rows)
 
 
 def _classic_only(scene: Scene, what: str) -> None:
@@ -179,12 +191,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
         print(f"images and heat maps in {args.out_dir}/")
     if args.json:
         print(f"metrics in {args.json}")
-    disagree = [r for r in rows if r.get("agrees") is False]
-    for r in disagree:
-        print(f"rtlab: {r['renderer']} disagrees with rtlab: {r['verdict']}", file=sys.stderr)
-    if disagree:
-        print("rtlab: exit status 1: the renderers disagree", file=sys.stderr)
-    return 1 if disagree else 0
+    return _agreement_status(rows)
 
 
 def cmd_bench(args: argparse.Namespace) -> None:
@@ -222,7 +229,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_render)
 
     p = sub.add_parser(
-        "demo", help="render the built-in demo scene (the course's Ex 25) with all three renderers"
+        "demo",
+        help="render the built-in demo scene (the course's Ex 25) with all three renderers; "
+        "exit 1 if they disagree",
     )
     p.add_argument("--out-dir", default="out", help="where the images go (default: out)")
     p.add_argument("--rtlab-only", action="store_true", help="only rtlab's render")

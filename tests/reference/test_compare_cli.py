@@ -142,6 +142,24 @@ def test_compare_exits_1_when_the_renderers_disagree(tmp_path, capsys, monkeypat
     )
 
 
+def test_demo_exits_1_when_the_renderers_disagree(tmp_path, capsys, monkeypatch):
+    """`make demo` is a newcomer's first proof that the renderers agree: with the same mirrored
+    converter injected, `rtlab demo` must say so in its exit status, as compare does."""
+    import converters.povray
+
+    def mirrored(scene, path):
+        sdl = converters.povray.to_povray(scene)
+        wrong = sdl.replace("right -x*", "right x*")
+        assert wrong != sdl, "the bug was not injected"
+        Path(path).write_text(wrong)
+        return Path(path)
+
+    monkeypatch.setattr("reference.povray.write_povray", mirrored)
+    args = ["demo", "--out-dir", str(tmp_path), "--width", "96", "--height", "48", "--quiet"]
+    assert main(args) == 1
+    assert "rtlab: povray disagrees with rtlab:" in capsys.readouterr().err
+
+
 def test_compare_gives_no_verdict_on_jittered_samples(capsys):
     """At spp > 1 each renderer jitters its own samples (and POV-Ray here takes one per pixel):
     no pixel rule applies, and compare says so rather than fail."""
