@@ -217,7 +217,7 @@ def near_blocker_probe(
     )
 
 
-def _blocked(o: Vec, d: Vec, max_t: float, spheres: list[tuple[Vec, float]]) -> bool:
+def spheres_block(o: Vec, d: Vec, max_t: float, spheres: list[tuple[Vec, float]]) -> bool:
     """Whether any sphere has a root strictly inside (0, max_t), from the exact roots."""
     for centre, radius in spheres:
         f = sub(o, centre)
@@ -252,7 +252,7 @@ def block_probe(
         concept=BLOCK,
         function="in_shadow",
         inputs=(*o, *d, max_t, len(spheres), *flat),
-        expected=(1.0 if _blocked(o, d, max_t, spheres) else 0.0, 1.0),
+        expected=(1.0 if spheres_block(o, d, max_t, spheres) else 0.0, 1.0),
         labels=("in shadow", "counts.shadow"),
         ulps=0,
         visibility=visibility,
