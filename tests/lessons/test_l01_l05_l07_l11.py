@@ -95,3 +95,58 @@ def test_l01_the_frame_is_right_handed_and_orthonormal() -> None:
         cross = (rr[1] * fr[2] - rr[2] * fr[1], rr[2] * fr[0] - rr[0] * fr[2],
                  rr[0] * fr[1] - rr[1] * fr[0])  # fmt: skip
         assert [float(c) for c in cross] == pytest.approx([float(x) for x in ur], abs=1e-15)
+
+
+def test_l11_marks_the_stereo_eye_and_keeps_the_core() -> None:
+    regions = [r for r in find_regions(CORE) if r.lesson == "L11"]
+    assert [(r.file, r.function) for r in regions] == [("03_camera.h", "stereo_eye")]
+    assert regions[0].parameters == ("centre", "eye_separation", "convergence", "side")
+
+
+def test_l07_the_chain_is_the_slides_geometric_series() -> None:
+    from lessons.L07_chain.checks import BOTTOM, TOP, WARM, chain
+
+    # Two parallel mirrors, the same one (C, alpha) for ever: sum_{k < D} alpha^k C.
+    for depth in (1, 2, 5, 9):
+        colour, secondary = chain([WARM] * 50, depth, 0.0, (0.0, 0.0, 0.0))
+        alpha = Fraction(WARM.alpha)
+        series = (1 - alpha**depth) / (1 - alpha)
+        assert colour == tuple(k * series for k in WARM.local())
+        assert secondary == depth - 1
+    # Alternating mirrors: C_T (1 + aT aB + ...) + aT C_B (1 + aT aB + ...) over 2n levels.
+    colour, _ = chain([TOP, BOTTOM] * 10, 8, 0.0, (0.0, 0.0, 0.0))
+    q = Fraction(TOP.alpha) * Fraction(BOTTOM.alpha)
+    s = (1 - q**4) / (1 - q)
+    assert colour == tuple(
+        t * s + Fraction(TOP.alpha) * b * s
+        for t, b in zip(TOP.local(), BOTTOM.local(), strict=True)
+    )
+    # A miss after one mirror adds alpha times the background; min_coefficient = alpha^2 still
+    # traces the level of coef alpha^2 and stops before alpha^3.
+    sky = (0.25, 0.5, 1.0)
+    colour, secondary = chain([WARM], 5, 0.0, sky)
+    assert colour == tuple(
+        k + Fraction(WARM.alpha) * Fraction(b) for k, b in zip(WARM.local(), sky, strict=True)
+    )
+    assert secondary == 1
+    _, secondary = chain([WARM] * 50, 40, WARM.alpha**2, (0.0, 0.0, 0.0))
+    assert secondary == 2
+
+
+def test_l11_toe_in_would_give_vertical_parallax() -> None:
+    # The check's closed form: with the frame unchanged the row of a point is the same in both
+    # eyes; a toed-in eye (forward turned by atan(h / convergence)) sees it in another row.
+    from lessons.L11_stereo.checks import probes
+
+    rows = [p for p in probes() if p.function == "stereo_eye" and p.inputs[0] == 3]
+    assert rows and all(p.expected[1] == p.expected[3] for p in rows)
+    h, conv, point = 0.125, 4.0, (0.5, 0.75, -2.0)  # the first parallax probe's geometry
+    angle = math.atan2(h, conv)
+    for side in (-1, 1):
+        eye_x = side * h
+        # The toed-in eye's forward and right (rotated about y), true_up stays y.
+        fx, fz = -side * math.sin(angle), -math.cos(angle)
+        v = (point[0] - eye_x, point[1], point[2])
+        z = v[0] * fx + v[2] * fz
+        row = (0.5 - (v[1] / z) / 2) * 64
+        assert abs(row - rows[0].expected[1]) > 0.05  # a visible vertical disparity
