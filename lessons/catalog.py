@@ -85,7 +85,12 @@ LESSONS: tuple[Lesson, ...] = (
         "Shadow rays",
         "Interaction between Lights and Objects",
         "the shadow ray, its range, and where it starts",
-        ("objects block light", "the shadow ray's range", "where the shadow ray starts"),
+        (
+            "objects block light",
+            "the shadow ray towards the light",
+            "the shadow ray's range",
+            "where the shadow ray starts",
+        ),
     ),
     Lesson(
         "L06",
@@ -102,6 +107,7 @@ LESSONS: tuple[Lesson, ...] = (
         "Specular Reflected Light; Simple Ray Tracing Algorithm",
         "trace(): the chain, its stops",
         (
+            "the colour of one hit: ambient, and N.L diffuse if not in shadow",
             "the reflection-coefficient chain",
             "stop when no intersection",
             "stop when coef << 1",
@@ -138,7 +144,11 @@ LESSONS: tuple[Lesson, ...] = (
         "Stereoscopy",
         "Stereoscopy",
         "a stereo pair of cameras",
-        ("the eye separation", "the parallel-axis asymmetric frustum"),
+        (
+            "the eye separation",
+            "the parallel-axis asymmetric frustum",
+            "parallax: none on the convergence plane, never vertical",
+        ),
     ),
     Lesson(
         "L12",

@@ -75,12 +75,19 @@ struct Camera {
 // distortions in stereoscopic video systems", Proc. SPIE 1915, 1993).
 inline Camera stereo_eye(const Camera &centre, double eye_separation, double convergence,
                          int side) {
+    // BEGIN SOLUTION L11
+    // PROMPT: One eye of a stereo pair (side -1 left, +1 right) seen through the initialized
+    // PROMPT: camera `centre`: move the eye half the eye separation along `right`, keep the
+    // PROMPT: centre's frame (parallel axes: no toe-in), and shift its image window sideways on
+    // PROMPT: the image plane (window_shift, in the plane's units at distance 1) so that both
+    // PROMPT: eyes' windows coincide on the plane at distance `convergence`.
     Camera view = centre; // the same frame: forward, right and true_up are the centre's
     const double half = side * eye_separation / 2;
     view.eye = centre.eye + half * centre.right;
     view.look_at = centre.look_at + half * centre.right; // parallel axes
     view.window_shift = centre.window_shift - half / convergence;
     return view;
+    // END SOLUTION
 }
 
 } // namespace rt

@@ -1,0 +1,53 @@
+// L01's probes (lessons/L01_camera/checks.py): the point p = o + t d of a ray, the camera's
+// frame (initialize()) and a primary ray through an image-plane point (primary_ray()).
+#include "03_camera.h"
+
+namespace l01 {
+
+// A camera as the scene gives it: eye, look_at, up, fov_y (degrees), width, height.
+rt::Camera read_camera(rt::probe::Args &a) {
+    rt::Camera cam;
+    cam.eye = a.vec();
+    cam.look_at = a.vec();
+    cam.up = a.vec();
+    cam.fov_y = a.next();
+    cam.width = int(a.next());
+    cam.height = int(a.next());
+    return cam;
+}
+
+} // namespace l01
+
+RT_PROBE(at) {
+    rt::Ray ray;
+    ray.o = a.vec();
+    ray.d = a.vec();
+    return rt::probe::out(ray.at(a.next()));
+}
+
+RT_PROBE(initialize) {
+    using rt::probe::out;
+    rt::Camera cam = l01::read_camera(a);
+    cam.initialize();
+    return out(cam.forward) + out(cam.right) + out(cam.true_up) + out(cam.plane_height) +
+           out(cam.plane_width);
+}
+
+// The frame is given, not derived, so that primary_ray() is checked on its own: eye, forward,
+// right, true_up, plane_width, plane_height, width, height, window_shift, then (sx, sy).
+RT_PROBE(primary_ray) {
+    using rt::probe::out;
+    rt::Camera cam;
+    cam.eye = a.vec();
+    cam.forward = a.vec();
+    cam.right = a.vec();
+    cam.true_up = a.vec();
+    cam.plane_width = a.next();
+    cam.plane_height = a.next();
+    cam.width = int(a.next());
+    cam.height = int(a.next());
+    cam.window_shift = a.next();
+    double sx = a.next();
+    rt::Ray ray = cam.primary_ray(sx, a.next());
+    return out(ray.o) + out(ray.d);
+}
