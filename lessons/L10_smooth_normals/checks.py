@@ -88,6 +88,13 @@ NG2: Vec = (0.6, 0.8, 0.0)
 def probes() -> list[Probe]:
     h = HIDDEN
     return [
+        smooth_probe(
+            "weights: a flat region, all three normals equal",
+            WEIGHTS,
+            (0.25, 0.25, 0.5),
+            (C, C, C),
+            NG,
+        ),
         smooth_probe("weights: at vertex p0", WEIGHTS, (1, 0, 0), (B, C, D), NG),
         smooth_probe("weights: at vertex p1", WEIGHTS, (0, 1, 0), (B, C, D), NG),
         smooth_probe("weights: at vertex p2", WEIGHTS, (0, 0, 1), (B, C, D), NG),
