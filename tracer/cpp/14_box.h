@@ -59,13 +59,13 @@ struct SlabRay {
 // range shrinks to the closest hit found so far, so a box beyond it is skipped.
 inline bool slab_test(const AABB &box, const SlabRay &r, const Interval &range, double &t_near) {
     // BEGIN SOLUTION L09
-    // PROMPT: Slide "Intersecting a Complex Object" ("test bounding box of entire object"): does the
-    // PROMPT: ray overlap the box's three slabs for some t within range? r.inv_d is 1/d per
-    // PROMPT: component (infinite for a zero one), r.near_x is 1 when max.x is the slab's near plane
-    // PROMPT: (d.x < 0), and r.inv_d_far is inv_d widened for the far planes (so rounding never
-    // PROMPT: misses a box the ray touches). Set t_near to where the ray enters (no earlier than
-    // PROMPT: range.min). A ray lying in a slab's plane gives 0 * infinity = NaN there: it must
-    // PROMPT: not decide the answer.
+    // PROMPT: Slide "Intersecting a Complex Object" ("test bounding box of entire object"): does
+    // PROMPT: the ray overlap the box's three slabs for some t within range? r.inv_d is 1/d per
+    // PROMPT: component (infinite for a zero one), r.near_x is 1 when max.x is the slab's near
+    // PROMPT: plane (d.x < 0), and r.inv_d_far is inv_d widened for the far planes (so rounding
+    // PROMPT: never misses a box the ray touches). Set t_near to where the ray enters (no earlier
+    // PROMPT: than range.min). A ray lying in a slab's plane gives 0 * infinity = NaN there: it
+    // PROMPT: must not decide the answer.
     const Vec3 *planes = &box.min; // planes[0] = min, planes[1] = max
     double tx0 = (planes[r.near_x].x - r.o.x) * r.inv_d.x;
     double tx1 = (planes[1 - r.near_x].x - r.o.x) * r.inv_d_far.x;
@@ -97,9 +97,9 @@ struct Slabs {
 // enters that slab; the ray is inside the box from the last entry to the first exit.
 inline Slabs slab_interval(const AABB &box, const Ray &ray) {
     // BEGIN SOLUTION L08
-    // PROMPT: The slab test (slide "Intersecting a Complex Object": axis-aligned box). For each axis,
-    // PROMPT: the t where the ray crosses the box's min and max planes; the smaller is where it
-    // PROMPT: enters that slab (d's component may be negative). Return the overlap of the three
+    // PROMPT: The slab test (slide "Intersecting a Complex Object": axis-aligned box). For each
+    // PROMPT: axis, the t where the ray crosses the box's min and max planes; the smaller is where
+    // PROMPT: it enters that slab (d's component may be negative). Return the overlap of the three
     // PROMPT: intervals, [t_enter, t_leave] (the latest entry, the earliest exit), and the axis of
     // PROMPT: each. A zero component of d: IEEE 1/0 = infinity gives the right limit, but a ray in
     // PROMPT: the plane of a face gives 0 * infinity = NaN, which must change nothing.

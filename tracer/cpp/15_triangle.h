@@ -107,10 +107,10 @@ inline bool intersect_triangle(const Vec3 &p0, const Vec3 &p1, const Vec3 &p2,
 inline void triangle_hit(const Vec3 &p0, const Vec3 &p1, const Vec3 &p2, const TriangleHit &th,
                          Hit &hit) {
     // BEGIN SOLUTION L08
-    // PROMPT: The hit record of a triangle hit: hit.t, the point p = b0 p0 + b1 p1 + b2 p2 (not
-    // PROMPT: o + t d, whose rounding error grows with t), its error bound hit.p_error =
-    // PROMPT: gamma(7) (|b0 p0| + |b1 p1| + |b2 p2|), and the unit normal hit.N = hit.Ng of the side
-    // PROMPT: from which p0, p1, p2 run counter-clockwise.
+    // PROMPT: The hit record of a triangle hit: hit.t, the point p = b0 p0 + b1 p1 + b2 p2 (not o +
+    // PROMPT: t d, whose rounding error grows with t), its error bound hit.p_error = gamma(7) (|b0
+    // PROMPT: p0| + |b1 p1| + |b2 p2|), and the unit normal hit.N = hit.Ng of the side from which
+    // PROMPT: p0, p1, p2 run counter-clockwise.
     hit.t = th.t;
     hit.p = th.b0 * p0 + th.b1 * p1 + th.b2 * p2;
     hit.p_error = gamma(7) * (abs(th.b0 * p0) + abs(th.b1 * p1) + abs(th.b2 * p2));

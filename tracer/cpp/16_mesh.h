@@ -41,10 +41,10 @@ struct BVHNode {
 inline Vec3 smooth_normal(const TriangleHit &th, const Vec3 &n0, const Vec3 &n1, const Vec3 &n2,
                           const Vec3 &Ng) {
     // BEGIN SOLUTION L10
-    // PROMPT: Gouraud shading (slide "Intersecting a Complex Object"): the shading normal at the hit,
-    // PROMPT: the vertex normals n0, n1, n2 (of p0, p1, p2) blended by the barycentric coordinates
-    // PROMPT: th.b0, th.b1, th.b2, as a unit vector; Ng (the face's unit normal) where the blend
-    // PROMPT: has zero length.
+    // PROMPT: Gouraud shading (slide "Intersecting a Complex Object"): the shading normal at the
+    // PROMPT: hit, the vertex normals n0, n1, n2 (of p0, p1, p2) blended by the barycentric
+    // PROMPT: coordinates th.b0, th.b1, th.b2, as a unit vector; Ng (the face's unit normal) where
+    // PROMPT: the blend has zero length.
     Vec3 n = th.b0 * n0 + th.b1 * n1 + th.b2 * n2;
     double len = length(n);
     return len > 0 ? n / len : Ng;
@@ -213,11 +213,11 @@ struct Mesh : Object {
         // BEGIN SOLUTION L09
         // PROMPT: The closest hit in the hierarchy (slide "Intersecting a Complex Object": "test
         // PROMPT: bounding box of entire object", then boxes within boxes). nodes[0] is the root;
-        // PROMPT: an inner node (count == 0) has its children at index + 1 and at node.first; a leaf
-        // PROMPT: holds triangles (leaf_hit()). Test a box with slab_test() within the current range
-        // PROMPT: and skip what it misses; visit the nearer child first, keep the farther on a
-        // PROMPT: stack of at most max_tree_depth + 1 entries with its entry t, and skip it if a hit
-        // PROMPT: has come nearer meanwhile. Count each box test in counts.box_tests and each
+        // PROMPT: an inner node (count == 0) has its children at index + 1 and at node.first; a
+        // PROMPT: leaf holds triangles (leaf_hit()). Test a box with slab_test() within the current
+        // PROMPT: range and skip what it misses; visit the nearer child first, keep the farther on
+        // PROMPT: a stack of at most max_tree_depth + 1 entries with its entry t, and skip it if a
+        // PROMPT: hit has come nearer meanwhile. Count each box test in counts.box_tests and each
         // PROMPT: triangle a leaf tests in counts.primitive_tests.
         if (nodes.empty()) return false;
         const WatertightRay wr(ray);
