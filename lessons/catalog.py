@@ -120,7 +120,13 @@ LESSONS: tuple[Lesson, ...] = (
         "Boxes and triangles",
         "Intersecting a Complex Object",
         "the slab test, the watertight two-sided triangle",
-        ("the axis-aligned box (slab test)", "the generic triangle"),
+        (
+            "the axis-aligned box (slab test)",
+            "the box's nearest hit in range",
+            "the generic triangle",
+            "the triangle seen from both sides",
+            "the triangle's point and normal",
+        ),
     ),
     Lesson(
         "L09",
@@ -128,7 +134,11 @@ LESSONS: tuple[Lesson, ...] = (
         "Meshes and bounding volumes (the bunny)",
         "Intersecting a Complex Object",
         "the bounding box, the hierarchy's closest hit",
-        ("the bounding box of the object", "the closest hit in the hierarchy"),
+        (
+            "the bounding box of the object",
+            "the closest hit in the hierarchy",
+            "a ray that misses a box skips the triangles in it",
+        ),
     ),
     Lesson(
         "L10",
@@ -136,7 +146,10 @@ LESSONS: tuple[Lesson, ...] = (
         "Smooth normals (Gouraud)",
         "Intersecting a Complex Object",
         "interpolated vertex normals",
-        ("Gouraud shading: interpolated vertex normals",),
+        (
+            "Gouraud shading: the vertex normals weighted by the barycentric coordinates",
+            "Gouraud shading: the interpolated normal made unit length again",
+        ),
     ),
     Lesson(
         "L11",

@@ -15,12 +15,12 @@ import pytest
 
 from lessons import grade
 from lessons.catalog import get_lesson
-from lessons.grader import lesson_probes
+from lessons.grader import lesson_probes, lessons_with_checks
 from lessons.markers import parse
 from lessons.mistakes import Mistake, mistakes, mutated_text, write_mistake
 from lessons.student import CORE, write_student_tree
 
-GRADED = ("L02", "L03", "L04", "L06")
+GRADED = tuple(lessons_with_checks())  # every lesson with a checks.py
 MISTAKES = [m for lesson in GRADED for m in mistakes(lesson)]
 
 

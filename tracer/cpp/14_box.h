@@ -54,8 +54,18 @@ struct SlabRay {
           near_x(inv_d.x < 0), near_y(inv_d.y < 0), near_z(inv_d.z < 0) {}
 };
 
-// Whether the ray overlaps the box's three slabs within range; t_near is where it enters.
+// Whether the ray overlaps the box's three slabs within range; t_near is where it enters. The
+// test a bounding volume needs (16_mesh.h): the ray's 1/d and signs come precomputed, and the
+// range shrinks to the closest hit found so far, so a box beyond it is skipped.
 inline bool slab_test(const AABB &box, const SlabRay &r, const Interval &range, double &t_near) {
+    // BEGIN SOLUTION L09
+    // PROMPT: Slide "Intersecting a Complex Object" ("test bounding box of entire object"): does
+    // PROMPT: the ray overlap the box's three slabs for some t within range? r.inv_d is 1/d per
+    // PROMPT: component (infinite for a zero one), r.near_x is 1 when max.x is the slab's near
+    // PROMPT: plane (d.x < 0), and r.inv_d_far is inv_d widened for the far planes (so rounding
+    // PROMPT: never misses a box the ray touches). Set t_near to where the ray enters (no earlier
+    // PROMPT: than range.min). A ray lying in a slab's plane gives 0 * infinity = NaN there: it
+    // PROMPT: must not decide the answer.
     const Vec3 *planes = &box.min; // planes[0] = min, planes[1] = max
     double tx0 = (planes[r.near_x].x - r.o.x) * r.inv_d.x;
     double tx1 = (planes[1 - r.near_x].x - r.o.x) * r.inv_d_far.x;
@@ -71,6 +81,65 @@ inline bool slab_test(const AABB &box, const SlabRay &r, const Interval &range, 
     lo = tz0 > lo ? tz0 : lo, hi = tz1 < hi ? tz1 : hi;
     t_near = lo;
     return lo <= hi;
+    // END SOLUTION
+}
+
+// Where a ray is inside the box: the overlap [t_enter, t_leave] of its three slabs' intervals
+// (empty when t_enter > t_leave), and the axes whose planes bound it (the faces it enters and
+// leaves by, for the normal).
+struct Slabs {
+    double t_enter, t_leave;
+    int enter_axis, leave_axis;
+};
+
+// Slide "Intersecting a Complex Object" (intersections: axis-aligned box), the slab test in its
+// plain form, for the Box object: each slab's two planes give two t, the nearer is where the ray
+// enters that slab; the ray is inside the box from the last entry to the first exit.
+inline Slabs slab_interval(const AABB &box, const Ray &ray) {
+    // BEGIN SOLUTION L08
+    // PROMPT: The slab test (slide "Intersecting a Complex Object": axis-aligned box). For each
+    // PROMPT: axis, the t where the ray crosses the box's min and max planes; the smaller is where
+    // PROMPT: it enters that slab (d's component may be negative). Return the overlap of the three
+    // PROMPT: intervals, [t_enter, t_leave] (the latest entry, the earliest exit), and the axis of
+    // PROMPT: each. A zero component of d: IEEE 1/0 = infinity gives the right limit, but a ray in
+    // PROMPT: the plane of a face gives 0 * infinity = NaN, which must change nothing.
+    Vec3 inv_d = reciprocal(ray.d);
+    double t_enter = -infinity, t_leave = infinity;
+    int enter_axis = 0, leave_axis = 0;
+    for (int axis = 0; axis < 3; ++axis) {
+        double t0 = (box.min[axis] - ray.o[axis]) * inv_d[axis];
+        double t1 = (box.max[axis] - ray.o[axis]) * inv_d[axis];
+        if (t0 > t1) std::swap(t0, t1);
+        // Strict comparisons: a NaN t (0 * infinity) fails both and changes nothing.
+        if (t0 > t_enter) t_enter = t0, enter_axis = axis;
+        if (t1 < t_leave) t_leave = t1, leave_axis = axis;
+    }
+    return {t_enter, t_leave, enter_axis, leave_axis};
+    // END SOLUTION
+}
+
+// Where the ray meets the box within range: t, the axis of the face, and whether it enters
+// there (found = false: it does not meet the box within range).
+struct BoxCrossing {
+    bool found;
+    double t;
+    int axis;
+    bool entering;
+};
+
+// The hit is where the ray enters the box, or where it leaves when it starts inside (the
+// entry lies before range.min), as the sphere's nearest root in range (slide "Intersecting a
+// Sphere": "internal").
+inline BoxCrossing box_crossing(const Slabs &slabs, const Interval &range) {
+    // BEGIN SOLUTION L08
+    // PROMPT: From the slab test's [t_enter, t_leave]: where the ray meets the box within the open
+    // PROMPT: range (range.surrounds(t)), and whether it enters there. An empty overlap is no hit;
+    // PROMPT: the entry when it is in range, else the exit (the ray starts inside), else no hit.
+    if (slabs.t_enter > slabs.t_leave) return {false, infinity, 0, false};
+    if (range.surrounds(slabs.t_enter)) return {true, slabs.t_enter, slabs.enter_axis, true};
+    if (range.surrounds(slabs.t_leave)) return {true, slabs.t_leave, slabs.leave_axis, false};
+    return {false, infinity, 0, false};
+    // END SOLUTION
 }
 
 // The box as an object: axis-aligned in its own coordinates, placed by a transform.
@@ -82,25 +151,11 @@ struct Box : Object {
              RayCounts &counts) const override {
         ++counts.primitive_tests;
         Ray ray = transform.to_object(world_ray);
-        Vec3 inv_d = reciprocal(ray.d);
-        // Entering and leaving t of each slab; the hit is where the ray enters the box, or
-        // leaves it when it starts inside.
-        double t_enter = -infinity, t_leave = infinity;
-        int enter_axis = 0, leave_axis = 0;
-        for (int axis = 0; axis < 3; ++axis) {
-            double t0 = (box.min[axis] - ray.o[axis]) * inv_d[axis];
-            double t1 = (box.max[axis] - ray.o[axis]) * inv_d[axis];
-            if (t0 > t1) std::swap(t0, t1);
-            if (t0 > t_enter) t_enter = t0, enter_axis = axis;
-            if (t1 < t_leave) t_leave = t1, leave_axis = axis;
-        }
-        if (t_enter > t_leave) return false;
-        double t;
-        int axis;
-        bool entering = range.surrounds(t_enter);
-        if (entering) t = t_enter, axis = enter_axis;
-        else if (range.surrounds(t_leave)) t = t_leave, axis = leave_axis;
-        else return false;
+        BoxCrossing c = box_crossing(slab_interval(box, ray), range);
+        if (!c.found) return false;
+        double t = c.t;
+        int axis = c.axis;
+        bool entering = c.entering;
         Vec3 p = ray.at(t);
         // The face is known exactly: put the point on it. The other two coordinates carry the
         // error of o + t d, with t from one subtraction, one multiplication: gamma(5) of their size.

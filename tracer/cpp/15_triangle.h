@@ -40,9 +40,37 @@ struct TriangleHit {
     double t, b0, b1, b2; // ray parameter and barycentric coordinates
 };
 
+// pbrt-v4's conservative bound deltaT on the rounding error of t (6.8.3), from the errors of
+// each step of the test below: a, b, c are the sheared vertices (x, y and the scaled z), e the
+// edge functions. A hit closer than this to range.min may be the surface the ray starts on.
+// Given to the student, not part of the exercise.
+inline double triangle_t_error(const Vec3 &a, const Vec3 &b, const Vec3 &c, double e0, double e1,
+                               double e2, double inv_det) {
+    double max_z = std::fmax(std::fabs(a.z), std::fmax(std::fabs(b.z), std::fabs(c.z)));
+    double max_x = std::fmax(std::fabs(a.x), std::fmax(std::fabs(b.x), std::fabs(c.x)));
+    double max_y = std::fmax(std::fabs(a.y), std::fmax(std::fabs(b.y), std::fabs(c.y)));
+    double delta_z = gamma(3) * max_z;
+    double delta_x = gamma(5) * (max_x + max_z), delta_y = gamma(5) * (max_y + max_z);
+    double delta_e = 2 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+    double max_e = std::fmax(std::fabs(e0), std::fmax(std::fabs(e1), std::fabs(e2)));
+    return 3 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) *
+           std::fabs(inv_det);
+}
+
 // Watertight ray/triangle test (Woop et al. 2013, with pbrt-v4's conservative bound on t, 6.8.3).
+// Two-sided: the edge functions all >= 0 or all <= 0 is a hit (the sign says which side the
+// ray comes from; both sides are the surface).
 inline bool intersect_triangle(const Vec3 &p0, const Vec3 &p1, const Vec3 &p2,
                                const WatertightRay &r, const Interval &range, TriangleHit &th) {
+    // BEGIN SOLUTION L08
+    // PROMPT: The generic triangle (slide "Intersecting a Complex Object"), watertight (Woop,
+    // PROMPT: Benthin and Wald 2013): translate the vertices to the ray's origin r.o, permute and
+    // PROMPT: shear them (r.kx, r.ky, r.kz, r.Sx, r.Sy, r.Sz) so that the ray runs along +z from
+    // PROMPT: (0, 0, 0); the three edge functions at (0, 0) are twice the signed areas of the
+    // PROMPT: sub-triangles. Inside (edge functions all >= 0 or all <= 0: both sides of the
+    // PROMPT: triangle) and t in (range.min, range.max]: fill th with t and the barycentric
+    // PROMPT: coordinates (b0 + b1 + b2 = 1, p = b0 p0 + b1 p1 + b2 p2) and return true. Reject
+    // PROMPT: a hit with t <= range.min + triangle_t_error(...) (the surface the ray starts on).
     // Translate to the ray origin, permute so the ray runs along z, shear x and y.
     Vec3 a = p0 - r.o, b = p1 - r.o, c = p2 - r.o;
     double ax = a[r.kx] + r.Sx * a[r.kz], ay = a[r.ky] + r.Sy * a[r.kz];
@@ -64,19 +92,13 @@ inline bool intersect_triangle(const Vec3 &p0, const Vec3 &p1, const Vec3 &p2,
     double inv_det = 1 / det;
     double t = t_scaled * inv_det;
     // t is a little uncertain; a hit closer than that uncertainty may be the surface the ray
-    // starts on. pbrt-v4's bound deltaT on t's error, from the errors of each step above.
-    double max_z = std::fmax(std::fabs(az), std::fmax(std::fabs(bz), std::fabs(cz)));
-    double max_x = std::fmax(std::fabs(ax), std::fmax(std::fabs(bx), std::fabs(cx)));
-    double max_y = std::fmax(std::fabs(ay), std::fmax(std::fabs(by), std::fabs(cy)));
-    double delta_z = gamma(3) * max_z;
-    double delta_x = gamma(5) * (max_x + max_z), delta_y = gamma(5) * (max_y + max_z);
-    double delta_e = 2 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
-    double max_e = std::fmax(std::fabs(e0), std::fmax(std::fabs(e1), std::fabs(e2)));
-    double delta_t = 3 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) *
-                     std::fabs(inv_det);
-    if (t <= range.min + delta_t) return false;
+    // starts on.
+    if (t <= range.min + triangle_t_error({ax, ay, az}, {bx, by, bz}, {cx, cy, cz}, e0, e1, e2,
+                                          inv_det))
+        return false;
     th = {t, e0 * inv_det, e1 * inv_det, e2 * inv_det};
     return true;
+    // END SOLUTION
 }
 
 // The hit record: the point from the barycentric coordinates (not o + t d, whose error grows
@@ -84,10 +106,16 @@ inline bool intersect_triangle(const Vec3 &p0, const Vec3 &p1, const Vec3 &p2,
 // vertices run counter-clockwise (the front).
 inline void triangle_hit(const Vec3 &p0, const Vec3 &p1, const Vec3 &p2, const TriangleHit &th,
                          Hit &hit) {
+    // BEGIN SOLUTION L08
+    // PROMPT: The hit record of a triangle hit: hit.t, the point p = b0 p0 + b1 p1 + b2 p2 (not o +
+    // PROMPT: t d, whose rounding error grows with t), its error bound hit.p_error = gamma(7) (|b0
+    // PROMPT: p0| + |b1 p1| + |b2 p2|), and the unit normal hit.N = hit.Ng of the side from which
+    // PROMPT: p0, p1, p2 run counter-clockwise.
     hit.t = th.t;
     hit.p = th.b0 * p0 + th.b1 * p1 + th.b2 * p2;
     hit.p_error = gamma(7) * (abs(th.b0 * p0) + abs(th.b1 * p1) + abs(th.b2 * p2));
     hit.N = hit.Ng = normalize(cross(p1 - p0, p2 - p0));
+    // END SOLUTION
 }
 
 } // namespace rt

@@ -31,6 +31,26 @@ struct BVHNode {
     int count = 0;  // triangles in a leaf; 0 for an inner node, whose first child follows it
 };
 
+// Slide "Intersecting a Complex Object" ("triangle mesh on vertexes, Gouraud shading"): a mesh
+// that stands for a smooth surface carries a normal per vertex; across a triangle the shading
+// normal is those three blended by the hit's barycentric coordinates (b0 weighs p0's normal,
+// ...), then made unit length again, since a blend of unit vectors is shorter than one. Gouraud
+// (1971) blended the colours computed at the vertices; blending the normals and shading each
+// point (Phong 1975) keeps highlights inside a triangle; either way the facets disappear. A
+// blend that vanishes (opposite normals) keeps the face's own normal Ng.
+inline Vec3 smooth_normal(const TriangleHit &th, const Vec3 &n0, const Vec3 &n1, const Vec3 &n2,
+                          const Vec3 &Ng) {
+    // BEGIN SOLUTION L10
+    // PROMPT: Gouraud shading (slide "Intersecting a Complex Object"): the shading normal at the
+    // PROMPT: hit, the vertex normals n0, n1, n2 (of p0, p1, p2) blended by the barycentric
+    // PROMPT: coordinates th.b0, th.b1, th.b2, as a unit vector; Ng (the face's unit normal) where
+    // PROMPT: the blend has zero length.
+    Vec3 n = th.b0 * n0 + th.b1 * n1 + th.b2 * n2;
+    double len = length(n);
+    return len > 0 ? n / len : Ng;
+    // END SOLUTION
+}
+
 struct Mesh : Object {
     // The deepest a leaf may lie. The traversal keeps at most one waiting node per level on its
     // stack, so a stack of max_tree_depth + 1 entries cannot overflow; 60 levels of a tree that
@@ -161,9 +181,44 @@ struct Mesh : Object {
     }
 
     // -- tracing --------------------------------------------------------------------------
+    // The closest of a leaf's triangles within range. Each hit shrinks range.max to it, so a
+    // later triangle counts only if it is nearer, and the traversal skips the boxes beyond it;
+    // `any` stops at the first hit (a shadow ray needs no more).
+    bool leaf_hit(const BVHNode &node, const WatertightRay &wr, Interval &range,
+                  TriangleHit &best, int &best_triangle, bool any) const {
+        // BEGIN SOLUTION L09
+        // PROMPT: Test the leaf's node.count triangles, from index node.first on: triangle i has
+        // PROMPT: its vertices at leaf_vertices[3 i], [3 i + 1], [3 i + 2] and its index in the
+        // PROMPT: mesh is order[i]. Keep the closest hit in (range.min, range.max] (best,
+        // PROMPT: best_triangle) and shrink range.max to it; with `any`, return at the first hit.
+        bool found = false;
+        for (int i = node.first; i < node.first + node.count; ++i) {
+            const Vec3 *v = &leaf_vertices[3 * size_t(i)];
+            TriangleHit th;
+            if (intersect_triangle(v[0], v[1], v[2], wr, range, th)) {
+                best = th;
+                best_triangle = order[size_t(i)];
+                range.max = th.t;
+                found = true;
+                if (any) return true;
+            }
+        }
+        return found;
+        // END SOLUTION
+    }
+
     // Walk the hierarchy front to back; `any` stops at the first hit (shadow rays).
     bool traverse(const Ray &ray, Interval range, TriangleHit &best, int &best_triangle,
                   RayCounts &counts, bool any) const {
+        // BEGIN SOLUTION L09
+        // PROMPT: The closest hit in the hierarchy (slide "Intersecting a Complex Object": "test
+        // PROMPT: bounding box of entire object", then boxes within boxes). nodes[0] is the root;
+        // PROMPT: an inner node (count == 0) has its children at index + 1 and at node.first; a
+        // PROMPT: leaf holds triangles (leaf_hit()). Test a box with slab_test() within the current
+        // PROMPT: range and skip what it misses; visit the nearer child first, keep the farther on
+        // PROMPT: a stack of at most max_tree_depth + 1 entries with its entry t, and skip it if a
+        // PROMPT: hit has come nearer meanwhile. Count each box test in counts.box_tests and each
+        // PROMPT: triangle a leaf tests in counts.primitive_tests.
         if (nodes.empty()) return false;
         const WatertightRay wr(ray);
         const SlabRay sr(ray);
@@ -182,16 +237,9 @@ struct Mesh : Object {
             const BVHNode &node = nodes[size_t(index)];
             if (node.count > 0) { // a leaf: its triangles, stored in leaf order
                 counts.primitive_tests += uint64_t(node.count);
-                for (int i = node.first; i < node.first + node.count; ++i) {
-                    const Vec3 *v = &leaf_vertices[3 * size_t(i)];
-                    TriangleHit th;
-                    if (intersect_triangle(v[0], v[1], v[2], wr, range, th)) {
-                        best = th;
-                        best_triangle = order[size_t(i)];
-                        range.max = th.t;
-                        found = true;
-                        if (any) return true;
-                    }
+                if (leaf_hit(node, wr, range, best, best_triangle, any)) {
+                    found = true;
+                    if (any) return true;
                 }
             } else {
                 const int left = index + 1, right = node.first;
@@ -216,6 +264,7 @@ struct Mesh : Object {
             index = stack[--top].node;
         }
         return found;
+        // END SOLUTION
     }
 
     bool hit(const Ray &ray, const Interval &range, Hit &hit, RayCounts &counts) const override {
@@ -225,12 +274,9 @@ struct Mesh : Object {
         const std::array<int, 3> &tri = triangles[size_t(t)];
         triangle_hit(vertices[size_t(tri[0])], vertices[size_t(tri[1])], vertices[size_t(tri[2])],
                      th, hit);
-        if (!normals.empty()) { // Gouraud-style: the vertex normals, interpolated
-            Vec3 n = th.b0 * normals[size_t(tri[0])] + th.b1 * normals[size_t(tri[1])] +
-                     th.b2 * normals[size_t(tri[2])];
-            double len = length(n);
-            if (len > 0) hit.N = n / len;
-        }
+        if (!normals.empty()) // Gouraud-style: the vertex normals, interpolated
+            hit.N = smooth_normal(th, normals[size_t(tri[0])], normals[size_t(tri[1])],
+                                  normals[size_t(tri[2])], hit.Ng);
         hit.object = triangle_object.empty() ? object : triangle_object[size_t(t)];
         hit.material = triangle_material.empty() ? material : triangle_material[size_t(t)];
         return true;
