@@ -16,23 +16,14 @@ from lessons import grade
 from lessons.catalog import get_lesson
 from lessons.grader import lesson_probes, lessons_with_checks
 from lessons.markers import find_regions
-from lessons.mistakes import Mistake, mistakes
+from lessons.mistakes import mistakes
 from lessons.student import CORE, write_student_tree
-from tests.lessons import test_grader
 
 MINE = ("L01", "L05", "L07", "L11")
-# Once test_grader.py grades every lesson with checks, these parametrisations run nothing.
-LESSONS = [lesson for lesson in MINE if lesson not in test_grader.GRADED]
-MISTAKES = [m for lesson in LESSONS for m in mistakes(lesson)]
 
 
 def test_the_lessons_have_checks() -> None:
     assert set(MINE) <= set(lessons_with_checks())
-
-
-@pytest.mark.parametrize("lesson", LESSONS)
-def test_the_solution_scores_full_marks(tmp_path: Path, lesson: str) -> None:
-    test_grader.test_the_solution_scores_full_marks(tmp_path, lesson)
 
 
 @pytest.mark.parametrize("lesson", MINE)
@@ -48,11 +39,6 @@ def test_public_and_hidden_probes_of_every_concept(lesson: str) -> None:
 @pytest.mark.parametrize("lesson", MINE)
 def test_at_least_four_known_wrong_versions(lesson: str) -> None:
     assert len(mistakes(lesson)) >= 4
-
-
-@pytest.mark.parametrize("mistake", MISTAKES, ids=[f"{m.lesson}-{m.name}" for m in MISTAKES])
-def test_a_known_wrong_version_is_caught_and_named(tmp_path: Path, mistake: Mistake) -> None:
-    test_grader.test_a_known_wrong_version_is_caught_and_named(tmp_path, mistake)
 
 
 @pytest.mark.parametrize("lesson", MINE)
