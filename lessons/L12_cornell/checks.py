@@ -379,7 +379,7 @@ def probes() -> list[Probe]:
             warm,
         ),
         estimate_probe(
-            "nee: hidden, a tilted light",
+            "nee: hidden, the estimate from a tilted light",
             (0.25, 0.0, -0.5),
             UP,
             (0.0, 1.5, 0.5),

@@ -17,13 +17,14 @@ Tolerances, from the conditioning (U = 2^-53):
   add U (r^2 + |l|^2) and 4 U |D|. So a backward-stable discriminant errs by at most about
   32 U a (r^2 + |l|^2 + |l| |f|): tolerance 64 U of that scale. The textbook b^2 - a c0 errs by
   U (b^2 + a |c0|), about 2 U a |f|^2: |f| / r times more where the line passes near the
-  centre. Every stiff probe has |f| / r >= 10^4, so the textbook form misses by 100 to 10^7
-  times the tolerance (tests/lessons/test_l12_l13.py checks this for each probe, by running
-  both formulas in double).
+  centre. Every stiff probe has |f| / r >= 10^4, and the textbook form misses by 37 (a grazing
+  ray, whose D is small) to 10^14 times the tolerance (tests/lessons/test_l12_l13.py runs both
+  formulas in double on each probe).
 - The roots from given (b, c0, D, 1/a). The stable form adds numbers of one sign only: a square
   root, a sum and a division or product, each root within 3 U of the exact root of
   a t^2 + 2 b t + c0 (D is the correctly rounded b^2 - a c0): 8 U relative. The textbook
-  (-b + sqrt(D)) / a loses |b| / |a t0| ulps on the root near zero: 10^12 or more here.
+  (-b + sqrt(D)) / a loses |b| / |a t0| ulps on the root near zero: 10^9 times the
+  tolerance or more here.
 - The whole intersection. A root moves by delta D / (2 a sqrt(D)) when D errs by delta D, and
   by U |f| / |d| with b: tolerance 64 U (|t| + |f| / |d| + (r^2 + |l|^2 + |l| |f|) / (2 sqrt(D)))
   (the last term is the conditioning of a near-double root: large for grazing rays).
