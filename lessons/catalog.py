@@ -169,7 +169,12 @@ LESSONS: tuple[Lesson, ...] = (
         "True global illumination: the Cornell box",
         "True Global Ray Tracing",
         "the path tracer's estimator: sampling, next-event estimation, MIS",
-        ("light bounces many times", "next-event estimation", "multiple importance sampling"),
+        (
+            "light bounces many times: the cosine-weighted bounce",
+            "each bounce attenuates light: Russian roulette",
+            "next-event estimation: a point on the area light",
+            "multiple importance sampling: the power heuristic",
+        ),
     ),
     Lesson(
         "L13",
@@ -177,7 +182,12 @@ LESSONS: tuple[Lesson, ...] = (
         "Precision: stiff and extreme cases",
         "Efficiency and Complexity",
         "the robust quadratic, self-intersection offsets",
-        ("the robust quadratic", "self-intersection offsets"),
+        (
+            "the robust quadratic: the discriminant without cancellation",
+            "the robust quadratic: the root without cancellation",
+            "stiff and extreme cases: far, tiny and grazing spheres",
+            "self-intersection offsets: along the normal, by the error bound",
+        ),
     ),
 )
 

@@ -55,17 +55,28 @@ inline double next_away(double v, double off) {
     return v;
 }
 
-// Move a hit point p, whose absolute error is at most p_error per component, along the unit
-// normal N far enough that it lies certainly on the side `toward` points to (pbrt-v4 6.8.6,
-// OffsetRayOrigin). The offset d = |N|.p_error is the largest distance the error box reaches
-// along N; the result is then rounded one ulp further away so the addition cannot fall back.
+// Lesson L13 (self-intersection offsets): move a hit point p, whose absolute error is at most
+// p_error per component, along the unit normal N far enough that it lies certainly on the side
+// `toward` points to (pbrt-v4 6.8.6, OffsetRayOrigin). The offset d = |N|.p_error is the largest
+// distance the error box reaches along N; the result is then rounded one ulp further away so the
+// addition cannot fall back. Along N, not along the ray: a grazing ray would need to travel far
+// to leave the error box, and the offset would then reach past nearby surfaces. Towards the side
+// `toward` points to: a reflected ray leaves on N's side, a refracted ray or a ray from inside a
+// sphere on the other.
 inline Vec3 offset_ray_origin(const Vec3 &p, const Vec3 &p_error, const Vec3 &N,
                               const Vec3 &toward) {
+    // BEGIN SOLUTION L13
+    // PROMPT: A new ray's origin near the hit point p (absolute error at most p_error per
+    // PROMPT: component, unit geometric normal N): p moved along N, to the side `toward` points to,
+    // PROMPT: by the distance the error box reaches along N, then one ulp further (next_away()),
+    // PROMPT: so the ray cannot hit the surface it leaves. No fixed epsilon: the error bound
+    // PROMPT: scales with p.
     double d = dot(abs(N), p_error);
     Vec3 offset = d * N;
     if (dot(toward, N) < 0) offset = -offset;
     Vec3 po = p + offset;
     return {next_away(po.x, offset.x), next_away(po.y, offset.y), next_away(po.z, offset.z)};
+    // END SOLUTION
 }
 
 } // namespace rt

@@ -4,13 +4,15 @@
 // Implicit surface (slide "Implicit Surfaces"): (p - c).(p - c) - r^2 = 0. With p = o + t d and
 // f = o - c this is the quadratic  a t^2 + 2 b t + c0 = 0,  a = d.d, b = f.d, c0 = f.f - r^2.
 //
-// The textbook discriminant b^2 - a c0 subtracts two huge, nearly equal numbers when the sphere
+// Precision (lesson L13, slide "Efficiency and Complexity": "pushing the envelope of hardware"):
+// the textbook discriminant b^2 - a c0 subtracts two huge, nearly equal numbers when the sphere
 // is small or far away, and loses every digit. Haines, Guenther and Akenine-Moeller, "Precision
 // Improvements for Ray/Sphere Intersection" (Ray Tracing Gems, ch. 7, 2019) compute it instead
 // from the vector l from the centre to the point of the line closest to it:
 //     b^2 - a c0 = a (r^2 - |f - (b/a) d|^2),
 // and take the roots in the stable form q = -(b + sign(b) sqrt(D)), t0 = c0/q, t1 = q/a, so
-// that neither root is the difference of two nearly equal numbers.
+// that neither root is the difference of two nearly equal numbers (sphere_discriminant() and
+// quadratic_roots() below; sphere_roots() and sphere_t() call them).
 #pragma once
 
 #include <cmath>
@@ -35,24 +37,56 @@ struct SphereRoots {
     double t0 = 0, t1 = 0;
 };
 
+// Lesson L13: the discriminant D = b^2 - a c0 of the quadratic, for f = o - c, the direction d,
+// a = d.d, inv_a = 1/a (sphere_t() has it already), b = f.d and r2 = r^2, without the
+// cancellation of b^2 - a c0: as a (r^2 - |l|^2) with l = f - (b/a) d, the vector from the
+// centre to the point of the line closest to it (Haines et al. 2019, eq. 7.5). Its error grows
+// with |f| / r, where the textbook form's grows with (|f| / r)^2.
+inline double sphere_discriminant(const Vec3 &f, const Vec3 &d, double a, double inv_a, double b,
+                                  double r2) {
+    // BEGIN SOLUTION L13
+    // PROMPT: The discriminant b^2 - a c0 (c0 = f.f - r2) of the ray's quadratic, computed so that
+    // PROMPT: it keeps its digits for a sphere far away or tiny (|f| >> r), where b^2 and a c0
+    // PROMPT: are huge and nearly equal: use the centre's distance to the ray's line (Ray
+    // PROMPT: Tracing Gems ch. 7, eq. 7.5).
+    Vec3 l = f - (b * inv_a) * d; // centre -> closest point of the line (Haines eq. 7.5)
+    return a * (r2 - dot(l, l));
+    // END SOLUTION
+}
+
+// Lesson L13: both roots t0 <= t1 of a t^2 + 2 b t + c0 = 0 from its discriminant D >= 0 and
+// inv_a = 1/a. The textbook (-b -+ sqrt(D)) / a subtracts two nearly equal numbers, -b and
+// sqrt(D), for the root nearer zero when |a c0| << b^2 (a ray that starts just off a sphere, or a
+// sphere far away seen from a point near another): that root loses its digits. The stable form
+// adds only numbers of one sign: q = -(b + sign(b) sqrt(D)), t1 = q / a, and t0 = c0 / q from Vieta's t0 t1 = c0 / a
+// (Press et al., Numerical Recipes, section 5.6; Haines et al. 2019, eq. 7.7).
+inline SphereRoots quadratic_roots(double b, double c0, double D, double inv_a) {
+    // BEGIN SOLUTION L13
+    // PROMPT: Both roots t0 <= t1 of a t^2 + 2 b t + c0 = 0, given D = b^2 - a c0 >= 0 and
+    // PROMPT: inv_a = 1/a, such that neither root is the difference of two nearly equal numbers
+    // PROMPT: (the small root of t^2 - 2e8 t + 1 = 0 is 5e-9, not 0). real = true.
+    double q = -(b + std::copysign(std::sqrt(D), b));
+    if (q == 0) return {true, 0, 0}; // b = D = 0: the double root t = 0
+    double t0 = c0 / q, t1 = q * inv_a;
+    if (t0 > t1) std::swap(t0, t1);
+    return {true, t0, t1};
+    // END SOLUTION
+}
+
 inline SphereRoots sphere_roots(const Sphere &s, const Ray &ray) {
     // BEGIN SOLUTION L02
     // PROMPT: Solve a t^2 + 2 b t + c0 = 0 for the ray's line, with f = o - c, a = d.d,
     // PROMPT: b = f.d, c0 = f.f - r^2. Return real = false when the line misses; otherwise both
-    // PROMPT: roots, t0 <= t1. Avoid the cancellation of b^2 - a c0 (see the top of this file).
+    // PROMPT: roots, t0 <= t1. The textbook formula will do here (lesson L13 returns to it:
+    // PROMPT: sphere_discriminant() and quadratic_roots() are its stubs until then).
     Vec3 f = ray.o - s.center;
     double a = dot(ray.d, ray.d);
     double b = dot(f, ray.d);
     double r2 = s.radius * s.radius;
-    Vec3 l = f - (b / a) * ray.d; // centre -> closest point of the line (Haines eq. 7.5)
-    double D = a * (r2 - dot(l, l));
+    double inv_a = 1 / a;
+    double D = sphere_discriminant(f, ray.d, a, inv_a, b, r2);
     if (D < 0) return {};
-    double q = -(b + std::copysign(std::sqrt(D), b));
-    if (q == 0) return {true, 0, 0}; // the origin is the touching point of a tangent ray
-    double c0 = dot(f, f) - r2;
-    double t0 = c0 / q, t1 = q / a;
-    if (t0 > t1) std::swap(t0, t1);
-    return {true, t0, t1};
+    return quadratic_roots(b, dot(f, f) - r2, D, inv_a);
     // END SOLUTION
 }
 
@@ -104,13 +138,12 @@ inline double sphere_t(const Sphere &s, const Ray &ray, const Interval &range) {
     if (c0 > 0 && b > 0) return infinity; // outside and moving away: both roots negative
     double a = dot(ray.d, ray.d);
     double inv_a = 1 / a; // 1/a depends on the ray only: the packet tracer computes it once
-    Vec3 l = f - (b * inv_a) * ray.d;
-    double D = a * (r2 - dot(l, l));
+    double D = sphere_discriminant(f, ray.d, a, inv_a, b, r2);
     if (D < 0) return infinity;
-    double q = -(b + std::copysign(std::sqrt(D), b));
-    if (q == 0) return infinity; // tangent at the origin itself: t = 0 is out of range
-    double t0 = c0 / q, t1 = q * inv_a;
-    if (t0 > t1) std::swap(t0, t1);
+    // (A tangent ray whose origin is the touching point itself has the double root t = 0,
+    // which the open range leaves out.)
+    SphereRoots roots = quadratic_roots(b, c0, D, inv_a);
+    double t0 = roots.t0, t1 = roots.t1;
     if (range.surrounds(t0)) return t0;
     if (range.surrounds(t1)) return t1;
     return infinity;

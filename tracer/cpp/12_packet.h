@@ -121,9 +121,10 @@ struct RayL {
 // square root are skipped (they cost more than all the rest).
 inline Lanes sphere_t(const Sphere &s, const RayL &ray, Lanes a, Lanes inv_a, Lanes max,
                       Mask active) {
-    // BEGIN SOLUTION L02
-    // PROMPT: The packet tracer's copy of 05_sphere.h sphere_t(), one ray per lane: not part of the
-    // PROMPT: exercise, hidden until lesson L02 is done (the lessons use the one-ray tracer).
+    // BEGIN SOLUTION L13
+    // PROMPT: The packet tracer's copy of 05_sphere.h sphere_t() with the robust quadratic, one ray
+    // PROMPT: per lane: not part of the exercise, hidden until lessons L02 and L13 are done (the
+    // PROMPT: lessons use the one-ray tracer).
     const Lanes inf = splat(infinity);
     Vec3L f = ray.o - splat(s.center);
     Lanes b = dot(f, ray.d);
@@ -220,11 +221,15 @@ inline Lanes next_away(Lanes v, Lanes off) {
 
 inline Vec3L offset_ray_origin(const Vec3L &p, const Vec3L &p_error, const Vec3L &N,
                                const Vec3L &toward) {
+    // BEGIN SOLUTION L13
+    // PROMPT: The packet tracer's copy of 02_ray.h offset_ray_origin(), per lane: not part of the
+    // PROMPT: exercise, hidden until lesson L13 is done.
     Lanes d = dot(abs(N), p_error);
     Vec3L offset = N * d;
     offset = select(dot(toward, N) < 0, -offset, offset);
     Vec3L po = p + offset;
     return {next_away(po.x, offset.x), next_away(po.y, offset.y), next_away(po.z, offset.z)};
+    // END SOLUTION
 }
 
 // The hit record of 05_sphere.h sphere_hit() and 06_plane.h plane_hit(), per lane (for spheres

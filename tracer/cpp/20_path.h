@@ -56,10 +56,32 @@ struct Frame {
     Vec3 to_world(const Vec3 &v) const { return v.x * s + v.y * t + v.z * n; }
 };
 
-// Cosine-weighted direction about +z (Malley's method): pdf = cos / pi.
+// Slide "True Global Ray Tracing": "light can bounce many times", "light scatters in complex
+// way". A Lambertian surface sends towards the eye f cos(theta) of the radiance arriving from a
+// direction at angle theta from its normal, f = albedo / pi; a bounce sampled with density
+// proportional to the cosine carries f cos / pdf = albedo, whatever the direction: no sample is
+// wasted on the grazing directions that contribute little. Malley's method (pbrt-v4 section A.5.3, "Cosine-
+// Weighted Hemisphere Sampling"): a point uniform on the unit disk, r = sqrt(u1), phi = 2 pi u2,
+// projected up onto the hemisphere, z = sqrt(1 - r^2), is distributed as cos / pi.
 inline Vec3 sample_cosine(double u1, double u2) {
+    // BEGIN SOLUTION L12
+    // PROMPT: A direction about +z whose density is cos(theta) / pi (Malley's method): a point
+    // PROMPT: uniform on the unit disk (radius sqrt(u1), angle 2 pi u2), lifted onto the
+    // PROMPT: hemisphere. u1 and u2 are uniform in [0, 1).
     double r = std::sqrt(u1), phi = 2 * pi * u2;
     return {r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0, 1 - u1))};
+    // END SOLUTION
+}
+
+// The solid-angle density of sample_cosine() at a direction whose cosine with +z (the normal) is
+// cos_theta: cos / pi, which integrates to one over the hemisphere (the integral of cos over
+// the hemisphere is pi).
+inline double cosine_pdf(double cos_theta) {
+    // BEGIN SOLUTION L12
+    // PROMPT: The density, per unit solid angle, with which sample_cosine() picks a direction at
+    // PROMPT: angle theta from the normal (cos_theta = cos(theta) > 0).
+    return cos_theta / pi;
+    // END SOLUTION
 }
 
 // Direction about +z distributed as cos^n: pdf = (n + 1) / (2 pi) cos^n.
@@ -113,7 +135,7 @@ struct BSDF {
     double pdf(const Vec3 &wo, const Vec3 &wi) const {
         double cos_i = dot(wi, N);
         if (cos_i <= 0 || dot(wo, N) <= 0) return 0;
-        double p = p_diffuse * cos_i / pi;
+        double p = p_diffuse * cosine_pdf(cos_i);
         if (p_glossy > 0) {
             double cos_a = dot(reflect(-wo, N), wi);
             if (cos_a > 0) p += p_glossy * (shininess + 1) / (2 * pi) * std::pow(cos_a, shininess);
@@ -147,8 +169,17 @@ inline bool sample_bsdf(const BSDF &b, const Vec3 &wo, double u0, double u1, dou
     return true;
 }
 
-// Multiple importance sampling, the power heuristic (Veach 1997, eq. 9.13).
+// Multiple importance sampling (Veach and Guibas 1995; Veach's thesis 1997, section 9.2): an
+// area light can be found by two strategies, next-event estimation (a point sampled on the light,
+// density pdf_light) and the scattered ray that happens to hit it (density pdf_bsdf). Counting
+// both in full counts the light twice; weighting each sample by w = pdf_s^2 / (pdf_light^2 +
+// pdf_bsdf^2), the power heuristic (eq. 9.13), keeps the estimate unbiased (the two weights of a
+// direction sum to one) and lets the strategy that samples it better dominate.
 inline double power_heuristic(double f, double g) {
+    // BEGIN SOLUTION L12
+    // PROMPT: The power heuristic's weight f^2 / (f^2 + g^2) of a sample drawn with density f, when
+    // PROMPT: the other strategy would have drawn it with density g (0 when both are 0). Keep it
+    // PROMPT: finite where f^2 overflows (f = 1e200).
     double f2 = f * f, g2 = g * g;
     if (f2 + g2 < infinity) return f2 + g2 > 0 ? f2 / (f2 + g2) : 0;
     // A density whose square overflows (a light of area 1e-150 seen edge on): the same weight,
@@ -159,6 +190,23 @@ inline double power_heuristic(double f, double g) {
     }
     double r = f / g;
     return r * r / (1 + r * r);
+    // END SOLUTION
+}
+
+// Both strategies' weights for one direction: next-event estimation's sample (light) and the
+// scattered ray's (bsdf). The path tracer uses the first at the vertex that samples the light,
+// the second when the scattered ray hits the light at the next vertex.
+struct MISWeights {
+    double light, bsdf;
+};
+
+inline MISWeights mis_weights(double pdf_light, double pdf_bsdf) {
+    // BEGIN SOLUTION L12
+    // PROMPT: The power heuristic's weights of the two strategies that can find an area light, for
+    // PROMPT: a direction that next-event estimation picks with density pdf_light and the
+    // PROMPT: scattered ray with density pdf_bsdf: light + bsdf must be one.
+    return {power_heuristic(pdf_light, pdf_bsdf), power_heuristic(pdf_bsdf, pdf_light)};
+    // END SOLUTION
 }
 
 // Emitting objects that next-event estimation can sample a point on: spheres and triangle
@@ -202,6 +250,49 @@ inline LightPoint sample_area_light(const AreaLight &light, double u0, double u1
     }
     lp.pdf_area = 1 / light.area;
     return lp;
+}
+
+// Next-event estimation (slide "True Global Ray Tracing": "area light"): at every vertex x a
+// point y on a light is chosen (by area, with probability `pick` for this light) and joined to x
+// by a shadow ray. An estimate of the light's radiance in solid angle needs the density of wi in
+// solid angle: a patch dA at distance r whose normal makes the angle theta_l with the ray fills
+// d omega = cos(theta_l) dA / r^2, so pdf_omega = pick * pdf_area * r^2 / cos(theta_l) (pbrt-v4
+// section 12.2.2; Veach's thesis eq. 8.10). The estimate f Le cos(theta_i) / pdf_omega is then
+// f Le G / (pick pdf_area) with the geometry term G = cos(theta_i) cos(theta_l) / r^2.
+struct LightConnection {
+    Vec3 wi;      // unit direction from x towards y
+    double cos_i; // at x: wi.N
+    double cos_l; // at y: the cosine between the light's normal and the direction back to x
+    double pdf;   // the solid-angle density of wi; 0 when the light turns its back to x
+};
+
+inline LightConnection connect_to_light(const Vec3 &x, const Vec3 &N, const LightPoint &lp,
+                                        double pick) {
+    // BEGIN SOLUTION L12
+    // PROMPT: Join the point x (shading normal N) to the light's point lp (lp.p, normal lp.Ng,
+    // PROMPT: density per unit area lp.pdf_area) chosen with probability `pick`: the unit direction
+    // PROMPT: wi to it, the cosines at both ends, and the density of wi per unit solid angle (0
+    // PROMPT: when the light faces away from x).
+    Vec3 v = lp.p - x;
+    double d2 = dot(v, v), d = std::sqrt(d2);
+    Vec3 wi = v / d;
+    double cos_l = -dot(lp.Ng, wi), cos_i = dot(wi, N);
+    double pdf = cos_l > 0 ? pick * lp.pdf_area * d2 / cos_l : 0;
+    return {wi, cos_i, cos_l, pdf};
+    // END SOLUTION
+}
+
+// What one unblocked light sample adds to the pixel: the path's throughput beta times the
+// estimate f Le cos(theta_i) / pdf, weighted by its MIS weight w (the Monte Carlo estimator of
+// the rendering equation's direct part, Kajiya 1986).
+inline Color light_estimate(const Color &beta, const Color &f, const Color &Le, double cos_i,
+                            double w, double pdf) {
+    // BEGIN SOLUTION L12
+    // PROMPT: The contribution of one unblocked light sample: throughput beta, BSDF value f, the
+    // PROMPT: light's radiance Le, the cosine at the surface cos_i, its MIS weight w and its
+    // PROMPT: solid-angle density pdf (beta f Le cos_i w / pdf, channel by channel).
+    return beta * f * Le * (cos_i * w / pdf);
+    // END SOLUTION
 }
 
 struct PathContext {
@@ -273,6 +364,24 @@ struct PathContext {
 constexpr int roulette_from_level = 5;         // Mitsuba's rr_depth
 constexpr double roulette_max_survival = 0.95; // Mitsuba's cap on the survival chance
 
+// Slide "True Global Ray Tracing": "each bounce attenuates light". Russian roulette (Arvo and
+// Kirk 1990; pbrt-v4 section 13.1.1) ends a path whose throughput beta has dropped, without
+// bias: it survives with probability q and then carries 1/q more, so the expectation is
+// unchanged. q follows the brightest channel of beta, capped at roulette_max_survival (as
+// Mitsuba's): even a bright path ends with a chance of 5 %, so none runs on for ever.
+// Returns whether the path goes on (beta reweighted), given u uniform in [0, 1).
+inline bool russian_roulette(Color &beta, double u) {
+    // BEGIN SOLUTION L12
+    // PROMPT: Survive with probability q = min(brightest channel of beta, roulette_max_survival)
+    // PROMPT: (u < q), and then divide beta by q so the estimate stays unbiased; return whether the
+    // PROMPT: path goes on.
+    double q = std::min(max_component(beta), roulette_max_survival);
+    if (!(u < q)) return false;
+    beta = beta * (1 / q);
+    return true;
+    // END SOLUTION
+}
+
 // One path from the camera: the radiance it carries back along `ray`.
 inline Color trace_path(const PathContext &ctx, Ray ray, Rng &rng, RayCounts &counts) {
     const Scene &scene = ctx.scene;
@@ -287,7 +396,7 @@ inline Color trace_path(const PathContext &ctx, Ray ray, Rng &rng, RayCounts &co
             if (ctx.environment) {
                 double w = prev_delta
                                ? 1
-                               : power_heuristic(prev_pdf, (1.0 / ctx.n_sampled) / (4 * pi));
+                               : mis_weights((1.0 / ctx.n_sampled) / (4 * pi), prev_pdf).bsdf;
                 L += beta * s.background * w;
             }
             break;
@@ -301,7 +410,7 @@ inline Color trace_path(const PathContext &ctx, Ray ray, Rng &rng, RayCounts &co
             double w = 1;
             int light = ctx.area_light_of_object[size_t(hit.object)];
             if (!prev_delta && light >= 0)
-                w = power_heuristic(prev_pdf, ctx.light_pdf(light, prev_x, hit.p, hit.Ng));
+                w = mis_weights(ctx.light_pdf(light, prev_x, hit.p, hit.Ng), prev_pdf).bsdf;
             L += beta * m.emission * w;
         }
         if (level >= s.max_depth) break;
@@ -334,19 +443,17 @@ inline Color trace_path(const PathContext &ctx, Ray ray, Rng &rng, RayCounts &co
                 if (k < int(ctx.area_lights.size())) {
                     const AreaLight &al = ctx.area_lights[size_t(k)];
                     LightPoint lp = sample_area_light(al, u0, u1, u2);
-                    Vec3 v = lp.p - hit.p;
-                    double d2 = dot(v, v), d = std::sqrt(d2);
-                    Vec3 wi = v / d;
-                    double cos_l = -dot(lp.Ng, wi), cos_i = dot(wi, N);
-                    if (cos_l > 0 && cos_i > 0 && dot(wi, Ng) > 0) {
-                        double pdf_l = (1.0 / ctx.n_sampled) * lp.pdf_area * d2 / cos_l;
+                    LightConnection c = connect_to_light(hit.p, N, lp, 1.0 / ctx.n_sampled);
+                    const Vec3 &wi = c.wi;
+                    if (c.cos_l > 0 && c.cos_i > 0 && dot(wi, Ng) > 0) {
                         // The light's point, moved off the light's own surface towards the hit
                         // (pbrt-v4 SpawnRayTo between two surfaces), so the light cannot block
                         // the ray that reaches it.
                         Vec3 target = offset_ray_origin(lp.p, lp.p_error, lp.Ng, -wi);
                         if (!in_shadow(scene, shadow_ray_to(hit, Ng, target), counts)) {
-                            double w = power_heuristic(pdf_l, bsdf.pdf(wo, wi));
-                            L += beta * bsdf.eval(wo, wi) * al.emission * (cos_i * w / pdf_l);
+                            double w = mis_weights(c.pdf, bsdf.pdf(wo, wi)).light;
+                            L += light_estimate(beta, bsdf.eval(wo, wi), al.emission, c.cos_i, w,
+                                                c.pdf);
                         }
                     }
                 } else { // the environment, uniformly over the sphere
@@ -355,8 +462,9 @@ inline Color trace_path(const PathContext &ctx, Ray ray, Rng &rng, RayCounts &co
                     if (cos_i > 0 && dot(wi, Ng) > 0 &&
                         !in_shadow(scene, shadow_ray_towards(hit, Ng, wi), counts)) {
                         double pdf_l = (1.0 / ctx.n_sampled) / (4 * pi);
-                        double w = power_heuristic(pdf_l, bsdf.pdf(wo, wi));
-                        L += beta * bsdf.eval(wo, wi) * s.background * (cos_i * w / pdf_l);
+                        double w = mis_weights(pdf_l, bsdf.pdf(wo, wi)).light;
+                        L += light_estimate(beta, bsdf.eval(wo, wi), s.background, cos_i, w,
+                                            pdf_l);
                     }
                 }
             }
@@ -369,15 +477,9 @@ inline Color trace_path(const PathContext &ctx, Ray ray, Rng &rng, RayCounts &co
         if (dot(bs.wi, Ng) <= 0) break; // a smooth normal sent it into the surface
         beta = beta * bs.weight;
         prev_delta = bs.delta, prev_pdf = bs.pdf, prev_x = hit.p;
-        // Russian roulette (as Mitsuba: rr_depth 5, and a survival chance of at most 0.95):
-        // survive with probability q and carry 1/q more, so the expectation is unchanged. The
-        // first bounces always survive (they carry most of the light); the cap keeps even a
-        // bright path's chance of ending above 5 %, so no path runs on for ever.
-        if (level >= roulette_from_level) {
-            double q = std::min(max_component(beta), roulette_max_survival);
-            if (!(rng.uniform() < q)) break;
-            beta = beta * (1 / q);
-        }
+        // Russian roulette from rr_depth 5 on (as Mitsuba): the first bounces always survive
+        // (they carry most of the light).
+        if (level >= roulette_from_level && !russian_roulette(beta, rng.uniform())) break;
         ray = secondary_ray(hit, Ng, bs.wi);
         ++counts.secondary;
     }
