@@ -1,6 +1,6 @@
-"""Lessons L12 (the path tracer's estimator) and L13 (precision): graded like the others (the
-solution full, the stub tree zero, every known-wrong version caught and named by its concept,
-public and hidden probes of every concept), and L13's stiff probes really are stiff: the
+"""Lessons L12 (the path tracer's estimator) and L13 (precision): the stub tree scores zero and
+every concept has public and hidden probes (tests/lessons/test_grader.py grades them like
+the others), and L13's stiff probes really are stiff: the
 textbook formulas, run in double here, fail them while the robust ones pass, and an L02
 solution written with the textbook formula still passes L02."""
 
@@ -16,25 +16,12 @@ import pytest
 from lessons import grade
 from lessons.catalog import get_lesson
 from lessons.grader import lesson_probes
-from lessons.mistakes import Mistake, mistakes
+from lessons.mistakes import mistakes
 from lessons.student import CORE, write_student_tree
-from tests.lessons import test_grader
 
 LESSONS = ("L12", "L13")
-# test_grader.py grades the lessons it lists; these two until it lists them (then each test
-# here that repeats one of its tests is left out, never run twice).
-OURS = tuple(lesson for lesson in LESSONS if lesson not in test_grader.GRADED)
-MISTAKES = [m for lesson in OURS for m in mistakes(lesson)]
-
-
-@pytest.mark.parametrize("lesson", OURS)
-def test_the_solution_scores_full_marks(tmp_path: Path, lesson: str) -> None:
-    test_grader.test_the_solution_scores_full_marks(tmp_path, lesson)
-
-
-@pytest.mark.parametrize("mistake", MISTAKES, ids=[f"{m.lesson}-{m.name}" for m in MISTAKES])
-def test_a_known_wrong_version_is_caught_and_named(tmp_path: Path, mistake: Mistake) -> None:
-    test_grader.test_a_known_wrong_version_is_caught_and_named(tmp_path, mistake)
+# tests/lessons/test_grader.py grades them as every other lesson (the solution full, every
+# known-wrong version caught and named); what is particular to them is here.
 
 
 @pytest.mark.parametrize("lesson", LESSONS)
