@@ -212,9 +212,11 @@ def references(check: SceneCheck, render: bool = True) -> dict[str, np.ndarray]:
 # Loads the built extension as tracer._core and, for each job from the first, renders the
 # classic image (one ray at a time: packets=False, the student's code as written) and the aov,
 # saving them with the ray counts; a line with the token before and after each, so that a
-# crash is charged to the scene that was rendering.
+# crash is charged to the scene that was rendering. The tracer package is the one in ROOT (the
+# child's directory), never an editable install's: an unpacked autograder runs its own.
 RENDER_CHILD = """
 import importlib.util, json, sys
+sys.meta_path[:] = [f for f in sys.meta_path if not type(f).__module__.startswith("_editable")]
 import numpy as np
 spec = importlib.util.spec_from_file_location("tracer._core", sys.argv[1])
 core = importlib.util.module_from_spec(spec)
