@@ -13,7 +13,7 @@ process, and compared with
   each lit primary hit, counted from Mitsuba's hits).
 
 A lesson's scene checks are data: ``lessons/Lnn_name/scenes/*.toml`` (scene files in the scene
-language) and ``lessons/Lnn_name/scenes/__init__.py``, whose ``SCENES`` list names each
+language) and ``the lesson folder's scenes/__init__.py``, whose ``SCENES`` list names each
 scene's concept, visibility, references and analytic values (lessons/README.md).
 
 The references are rendered by POV-Ray and Mitsuba once and cached in ``reference_dir()``
@@ -114,7 +114,7 @@ class SceneCheckError(ValueError):
 
 
 def lesson_scenes(lesson: str) -> list[SceneCheck]:
-    """The lesson's scene checks (``SCENES`` of lessons/Lnn_name/scenes/__init__.py), or []."""
+    """The lesson's scene checks (``SCENES`` of the lesson folder's scenes/__init__.py), or []."""
     info = get_lesson(lesson)
     if not (info.folder / "scenes" / "__init__.py").exists():
         return []

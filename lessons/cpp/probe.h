@@ -1,4 +1,4 @@
-// What every lesson's probes (lessons/Lnn_name/probes.h) share: the arguments of a probe as
+// What every lesson's probes (each lesson folder's probes.h) share: the arguments of a probe as
 // exact doubles, the values it returns printed exactly (%a), and the table of probes by function
 // name. The grader (lessons/grader.py) builds one program from this file, the probes.h of the
 // lessons it grades and probe_main.cpp, concatenated in that order.
