@@ -15,11 +15,23 @@ SCENES = [
         "the five cases: none, once, tangent, internal, twice",
         "the inner wall of a sphere around the camera (the case 'once': t0 < 0 < t1)",
         analytic=(
-            Analytic(40, 30, "depth", (3.5,), FLOAT32,
-                     "the centre ray from z = 0.5 meets the wall of radius 3 at z = -3"),
-            Analytic(40, 30, "normal", (0.0, 0.0, -1.0), FLOAT32,
-                     "the outward normal of the sphere at (0, 0, -3)"),
-        ),  # fmt: skip
+            Analytic(
+                40,
+                30,
+                "depth",
+                (3.5,),
+                FLOAT32,
+                "the centre ray from z = 0.5 meets the wall of radius 3 at z = -3",
+            ),
+            Analytic(
+                40,
+                30,
+                "normal",
+                (0.0, 0.0, -1.0),
+                FLOAT32,
+                "the outward normal of the sphere at (0, 0, -3)",
+            ),
+        ),
         hint="from inside the sphere t0 < 0 < t1: the hit is t1, the far root",
     ),
     SceneCheck(

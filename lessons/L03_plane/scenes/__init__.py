@@ -16,11 +16,17 @@ SCENES = [
         "the plane (p - a).n = 0",
         "a floor at y = -0.5 (its point a = (3, -0.5, -2)) seen at an angle, a ball on it",
         analytic=(
-            Analytic(40, 30, "depth", (1.25 * math.sqrt(20.0),), FLOAT32,
-                     "the centre ray from (0, 2, 4) towards the origin falls 2.5 to y = -0.5: "
-                     "t = 1.25 sqrt(20)"),
+            Analytic(
+                40,
+                30,
+                "depth",
+                (1.25 * math.sqrt(20.0),),
+                FLOAT32,
+                "the centre ray from (0, 2, 4) towards the origin falls 2.5 to y = -0.5: "
+                "t = 1.25 sqrt(20)",
+            ),
             Analytic(40, 30, "normal", (0.0, 1.0, 0.0), FLOAT32, "the floor's normal"),
-        ),  # fmt: skip
+        ),
         hint="t = ((a - o).n) / (d.n), with a the plane's point",
     ),
     SceneCheck(
