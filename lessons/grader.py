@@ -22,6 +22,7 @@ import os
 import re
 import secrets
 import time
+from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -181,6 +182,7 @@ class Splice:
     files: dict[str, str]  # core file name -> its text with the student's regions
     missing: list[Region]  # regions the submission does not hold (stubbed)
     notes: list[str]
+    taken: set[str] = field(default_factory=set)  # the lessons whose regions are the student's
 
 
 def _lesson_regions(lesson: str | None) -> dict[str, list[Region]]:
@@ -222,6 +224,7 @@ def splice(submitted: dict[str, Path], lesson: str | None) -> Splice:
     files: dict[str, str] = {}
     missing: list[Region] = []
     notes: list[str] = []
+    taken: set[str] = set()
     for name, regions in _lesson_regions(lesson).items():
         if lesson is None and name not in submitted:
             continue
@@ -242,6 +245,7 @@ def splice(submitted: dict[str, Path], lesson: str | None) -> Splice:
             if region.key in own:
                 stubbed = stubbed or is_stub
                 lines[body_start : region.end - 1] = body
+                taken.add(region.lesson)
             else:
                 missing.append(region)
                 lines[region.begin - 1 : region.end] = stub_lines(region)
@@ -257,7 +261,7 @@ def splice(submitted: dict[str, Path], lesson: str | None) -> Splice:
             f"`{region.function}()` of {lesson} was not found in your `{region.file}` (not handed "
             "in, or its BEGIN/END SOLUTION lines were removed): graded as not implemented."
         )
-    return Splice(files, missing, notes)
+    return Splice(files, missing, notes, taken)
 
 
 # --- running the probes ------------------------------------------------------------------
@@ -453,7 +457,7 @@ def _failed_all(
     probes: list[Probe],
     kind: str,
     text: str,
-    scenes: list[SceneCheck] = (),  # type: ignore[assignment]
+    scenes: Sequence[SceneCheck] = (),
 ) -> list[TestResult]:
     points = _points(probes, scenes)
     tests = [
@@ -489,7 +493,7 @@ def _failed_all(
     return tests
 
 
-def _points(probes: list[Probe], scenes: list[SceneCheck] = ()) -> dict[str, float]:  # type: ignore[assignment]
+def _points(probes: list[Probe], scenes: Sequence[SceneCheck] = ()) -> dict[str, float]:
     """Each concept is worth CONCEPT_POINTS, shared among all its checks (probes and scenes)."""
     counts: dict[str, int] = {}
     for c in [*probes, *scenes]:
@@ -648,8 +652,10 @@ def integration_test(submitted: dict[str, Path], artifacts: Path | None) -> Test
         else:
             rendered = render_student(build, [INTEGRATION_SCENE], work / "renders")[0]
         test = _scene_test(INTEGRATION_SCENE, 0.0, rendered, artifacts)
+    yours = ", ".join(sorted(spliced.taken)) or "none"
     test.output += (
-        "\n\n(Worth no points: each mistake it shows is charged once, by its lesson's checks.)"
+        f"\n\nYour code of {yours} together, the course's solution elsewhere. (Worth no "
+        "points: each mistake it shows is charged once, by its lesson's checks.)"
     )
     return test
 
