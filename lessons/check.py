@@ -43,7 +43,8 @@ def _markers(lesson: str) -> str:
     count = 0
     for path in sorted([*CORE.glob("*.h"), *CORE.glob("*.cpp")]):
         try:
-            count += sum(r.lesson == lesson for r in parse(path.read_text(), path.name))
+            regions = parse(path.read_text(), path.name)
+            count += sum(r.lesson == lesson and not r.is_copy for r in regions)
         except MarkerError as error:
             return f"broken: {error}"
     return f"ok ({count} regions)" if count else "no regions of this lesson in tracer/cpp/"
@@ -85,7 +86,7 @@ def check_lesson(
         shutil.copytree(CORE, solution)
         result = grade(solution, lesson=lesson, integration=False)
         if result.score == result.max_score > 0:
-            report.solution = f"full ({result.max_score:g})"
+            report.solution = f"full ({result.max_score:.4g})"
         else:
             report.solution = f"{result.score:g} of {result.max_score:g}"
             failed = [t.name for t in result.tests if t.status == "failed"]
