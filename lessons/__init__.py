@@ -3,7 +3,7 @@ a submission (lessons/grader.py)."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from pathlib import Path
@@ -11,8 +11,9 @@ if TYPE_CHECKING:
     from lessons.grader import Result
 
 
-def grade(submission: str | Path, lesson: str | None = None) -> Result:
-    """Grade a submission directory on `lesson`, or on every lesson its files touch."""
+def grade(submission: str | Path, lesson: str | None = None, **options: Any) -> Result:
+    """Grade a submission directory on `lesson`, or on every lesson its files touch; options:
+    public, scenes, integration, artifacts (lessons.grader.grade)."""
     from lessons.grader import grade as grade_
 
-    return grade_(submission, lesson)
+    return grade_(submission, lesson, **options)

@@ -1,5 +1,6 @@
-"""``rtlab lesson list | show Lnn | student Lnn --out DIR [--from PREV] | grade DIR``: the
-verb's work (the parser lives in tracer/cli.py with the other verbs)."""
+"""``rtlab lesson list | show Lnn | student Lnn --out DIR [--from PREV] | grade DIR [--public]
+| check [--lesson Lnn] | autograder Lnn --out ZIP``: the verb's work (the parser's entry lives
+in tracer/cli.py with the other verbs)."""
 
 from __future__ import annotations
 
@@ -32,6 +33,27 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--lesson", help="the lesson to grade (default: every lesson the submission's files touch)"
     )
     p.add_argument("--json", dest="json_path", help="write Gradescope's results.json here")
+    p.add_argument(
+        "--public",
+        action="store_true",
+        help="only the public checks (a student's self-check; the hidden variants count later)",
+    )
+    p.add_argument(
+        "--no-scenes", action="store_true", help="probes only: no scene checks (quicker)"
+    )
+    p = sub.add_parser(
+        "check",
+        help="instructor: markers, stub trees, solution and known-wrong versions of every lesson",
+    )
+    p.add_argument("--lesson", help="only this lesson (default: every lesson with checks)")
+    p.add_argument(
+        "--no-scenes",
+        action="store_true",
+        help="grade the known-wrong versions on their probes only (quicker)",
+    )
+    p = sub.add_parser("autograder", help="instructor: the zip Gradescope takes for a lesson")
+    p.add_argument("lesson", help="a lesson id, e.g. L04")
+    p.add_argument("--out", required=True, help="the zip to write, e.g. autograder.zip")
 
 
 def cmd_list() -> int:
@@ -70,14 +92,24 @@ def cmd_student(lesson_id: str, out: str, from_dir: str | None) -> int:
     return 0
 
 
-def cmd_grade(submission: str, lesson: str | None, json_path: str | None) -> int:
+def cmd_grade(
+    submission: str,
+    lesson: str | None,
+    json_path: str | None,
+    public: bool = False,
+    scenes: bool = True,
+) -> int:
     """Print the diagnosis and the score; write results.json (always, also for an empty or a
-    broken submission). Exit status 0 whatever the score: grading worked."""
+    broken submission) and the heat maps of failing scenes beside it. Exit status 0 whatever
+    the score: grading worked."""
     from lessons.grader import grade
 
     if lesson is not None:
         lesson = get_lesson(lesson).id
-    result = grade(Path(submission), lesson)
+    artifacts = Path(json_path).resolve().parent if json_path else None
+    if artifacts is not None:
+        artifacts.mkdir(parents=True, exist_ok=True)
+    result = grade(Path(submission), lesson, public=public, scenes=scenes, artifacts=artifacts)
     if json_path:
         result.write(json_path)
     print(result.diagnosis)
@@ -87,7 +119,31 @@ def cmd_grade(submission: str, lesson: str | None, json_path: str | None) -> int
         f"rtlab: {', '.join(result.lessons)}: score {result.score:g} of {result.max_score:g} "
         f"({sum(t.status == 'passed' for t in result.tests)} of {len(result.tests)} checks pass)"
         + (f"; wrote {json_path}" if json_path else "")
+        + (" (public checks only: the hidden variants count in the final grade)" if public else "")
     )
+    return 0
+
+
+def cmd_check(lesson: str | None, scenes: bool) -> int:
+    """The instructor's check; exit status 1 on any failure."""
+    from lessons.check import check_lessons, format_table
+    from lessons.grader import lessons_with_checks
+
+    chosen = [get_lesson(lesson).id] if lesson else lessons_with_checks()
+    reports = check_lessons(chosen, scenes=scenes)
+    print(format_table(reports))
+    bad = [r.lesson for r in reports if not r.ok]
+    print(f"rtlab: {len(reports) - len(bad)} of {len(reports)} lessons pass" +
+          (f"; failing: {', '.join(bad)}" if bad else ""))  # fmt: skip
+    return 1 if bad else 0
+
+
+def cmd_autograder(lesson: str, out: str) -> int:
+    from lessons.autograder import build_zip
+
+    names = build_zip(get_lesson(lesson).id, Path(out))
+    print(f"rtlab: wrote {out}: Gradescope's autograder for {lesson}, with {len(names)} "
+          "scenes' references pre-rendered by POV-Ray and Mitsuba")  # fmt: skip
     return 0
 
 
@@ -99,7 +155,13 @@ def run(args: argparse.Namespace) -> int:
         if args.lesson_command == "show":
             return cmd_show(args.lesson)
         if args.lesson_command == "grade":
-            return cmd_grade(args.submission, args.lesson, args.json_path)
+            return cmd_grade(
+                args.submission, args.lesson, args.json_path, args.public, not args.no_scenes
+            )
+        if args.lesson_command == "check":
+            return cmd_check(args.lesson, not args.no_scenes)
+        if args.lesson_command == "autograder":
+            return cmd_autograder(args.lesson, args.out)
         return cmd_student(args.lesson, args.out, args.from_dir)
     except (UnknownLessonError, StudentTreeError, MarkerError, NoChecksError) as error:
         print(f"rtlab: error: {error}", file=sys.stderr)

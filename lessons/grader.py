@@ -18,16 +18,38 @@ from __future__ import annotations
 
 import importlib
 import json
+import os
+import re
 import secrets
 import time
+from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from lessons.catalog import BY_ID, get_lesson
 from lessons.markers import MarkerError, Region, parse
 from lessons.probe import Probe, fmt
-from lessons.sandbox import Build, Limits, build_probe, run_limited, temporary_work
+from lessons.sandbox import (
+    Build,
+    Limits,
+    build_extension,
+    build_probe,
+    run_limited,
+    temporary_work,
+)
+from lessons.scene_checks import (
+    ROOT,
+    Rendered,
+    SceneCheck,
+    heat_map_path,
+    judge,
+    lesson_scenes,
+    references,
+    render_student,
+)
 from lessons.student import CORE, STUB_HEADER, _submitted_files, _with_include, stub_lines
+from reference.metrics import heat_map
 
 HERE = Path(__file__).resolve().parent
 PROBE_MAIN = HERE / "cpp" / "probe_main.cpp"
@@ -111,7 +133,19 @@ class NoChecksError(ValueError):
 
 
 def lessons_with_checks() -> list[str]:
-    return [i for i, lesson in BY_ID.items() if (lesson.folder / "checks.py").exists()]
+    """The lessons with probes (checks.py) or scene checks (scenes/__init__.py)."""
+    return [
+        i
+        for i, lesson in BY_ID.items()
+        if (lesson.folder / "checks.py").exists()
+        or (lesson.folder / "scenes" / "__init__.py").exists()
+    ]
+
+
+def _depends(lesson: str) -> dict[str, tuple[str, ...]]:
+    if not (get_lesson(lesson).folder / "checks.py").exists():
+        return {}
+    return getattr(_checks(lesson), "DEPENDS", {})
 
 
 def _checks(lesson: str):  # noqa: ANN202 - the lesson's checks module
@@ -130,6 +164,8 @@ def probe_source(lessons: list[str]) -> str:
 
 
 def lesson_probes(lesson: str) -> list[Probe]:
+    if not (get_lesson(lesson).folder / "checks.py").exists():
+        return []
     probes = _checks(lesson).probes()
     concepts = set(get_lesson(lesson).concepts)
     for probe in probes:
@@ -146,13 +182,15 @@ class Splice:
     files: dict[str, str]  # core file name -> its text with the student's regions
     missing: list[Region]  # regions the submission does not hold (stubbed)
     notes: list[str]
+    taken: set[str] = field(default_factory=set)  # the lessons whose regions are the student's
 
 
-def _lesson_regions(lesson: str) -> dict[str, list[Region]]:
+def _lesson_regions(lesson: str | None) -> dict[str, list[Region]]:
+    """The solution's regions of `lesson` (of every lesson: None), by file."""
     by_file: dict[str, list[Region]] = {}
     for path in sorted([*CORE.glob("*.h"), *CORE.glob("*.cpp")]):
         for region in parse(path.read_text(), path.name):
-            if region.lesson == lesson and not region.is_copy:
+            if (lesson is None or region.lesson == lesson) and not region.is_copy:
                 by_file.setdefault(path.name, []).append(region)
     return by_file
 
@@ -177,13 +215,19 @@ def _extra_includes(student_text: str, solution_text: str) -> list[str]:
     ]
 
 
-def splice(submitted: dict[str, Path], lesson: str) -> Splice:
+def splice(submitted: dict[str, Path], lesson: str | None) -> Splice:
     """The solution's files holding lesson `lesson`'s regions, each region's body replaced by
-    the submission's; a region the submission lacks becomes a stub (not handed in)."""
+    the submission's; a region the submission lacks becomes a stub (not handed in).
+
+    With `lesson` None (the integration check): every lesson's regions the submission holds
+    and has written (not a stub), each the student's, the rest the solution's."""
     files: dict[str, str] = {}
     missing: list[Region] = []
     notes: list[str] = []
+    taken: set[str] = set()
     for name, regions in _lesson_regions(lesson).items():
+        if lesson is None and name not in submitted:
+            continue
         solution = (CORE / name).read_text()
         own: dict[tuple[str, str, str], Region] = {}
         student_text = ""
@@ -194,10 +238,14 @@ def splice(submitted: dict[str, Path], lesson: str) -> Splice:
         stubbed = False
         for region in sorted(regions, key=lambda r: r.begin, reverse=True):
             body_start = region.end - 1 - len(region.body)
+            body = list(own[region.key].body) if region.key in own else []
+            is_stub = any("not_implemented(" in b for b in body)
+            if lesson is None and (region.key not in own or is_stub):
+                continue  # the integration keeps the solution where the student wrote nothing
             if region.key in own:
-                body = list(own[region.key].body)
-                stubbed = stubbed or any("not_implemented(" in b for b in body)
+                stubbed = stubbed or is_stub
                 lines[body_start : region.end - 1] = body
+                taken.add(region.lesson)
             else:
                 missing.append(region)
                 lines[region.begin - 1 : region.end] = stub_lines(region)
@@ -213,7 +261,7 @@ def splice(submitted: dict[str, Path], lesson: str) -> Splice:
             f"`{region.function}()` of {lesson} was not found in your `{region.file}` (not handed "
             "in, or its BEGIN/END SOLUTION lines were removed): graded as not implemented."
         )
-    return Splice(files, missing, notes)
+    return Splice(files, missing, notes, taken)
 
 
 # --- running the probes ------------------------------------------------------------------
@@ -361,12 +409,12 @@ def diagnose(lesson: str, tests: list[TestResult], depends: dict[str, tuple[str,
     if kinds == {"compile_error"}:
         return f"{lesson}: {failed[0].output[0].lower()}{failed[0].output[1:]}"
     if "not_implemented" in kinds and all(t.kind == "not_implemented" for t in mine):
-        functions = sorted({t.function for t in mine})
+        functions = sorted({t.function for t in mine if t.function})
         return (
             f"{lesson}: not implemented: {', '.join(f + '()' for f in functions)} "
             "(write them between their BEGIN SOLUTION and END SOLUTION lines)."
         )
-    stubs = sorted({t.function for t in failed if t.kind == "not_implemented"})
+    stubs = sorted({t.function for t in failed if t.kind == "not_implemented" and t.function})
     stub_line = f"Not implemented yet: {', '.join(f + '()' for f in stubs)}." if stubs else ""
     written = [t for t in failed if t.kind != "not_implemented"]
     if not written:
@@ -384,7 +432,7 @@ def diagnose(lesson: str, tests: list[TestResult], depends: dict[str, tuple[str,
     first = of[0]
     total = sum(t.concept == concept for t in mine)
     lines = [f"{lesson}: wrong: {concept} ({len(of)} of {total} checks fail)."]
-    if first.kind != "probe":
+    if first.kind not in ("probe", "scene"):
         what = WHAT.get(first.kind, first.kind).lower()
         lines[0] = f"{lesson}: {concept}: {what} ({first.name})."
     others = [c for c in broken if c != concept]
@@ -404,63 +452,212 @@ def diagnose(lesson: str, tests: list[TestResult], depends: dict[str, tuple[str,
 # --- grading -----------------------------------------------------------------------------
 
 
-def _failed_all(lesson: str, probes: list[Probe], kind: str, text: str) -> list[TestResult]:
-    points = _points(probes)
-    return [
+def _failed_all(
+    lesson: str,
+    probes: list[Probe],
+    kind: str,
+    text: str,
+    scenes: Sequence[SceneCheck] = (),
+) -> list[TestResult]:
+    points = _points(probes, scenes)
+    tests = [
         TestResult(
             p.name,
             lesson,
             p.concept,
             0.0,
-            points[i],
+            points[p.concept],
             "failed",
             text,
             p.visibility,
             p.function,
             kind,
         )
-        for i, p in enumerate(probes)
+        for p in probes
     ]
+    tests += [
+        TestResult(
+            _scene_name(c),
+            lesson,
+            c.concept,
+            0.0,
+            points[c.concept],
+            "failed",
+            text,
+            c.visibility,
+            "",
+            kind,
+        )
+        for c in scenes
+    ]
+    return tests
 
 
-def _points(probes: list[Probe]) -> list[float]:
+def _points(probes: list[Probe], scenes: Sequence[SceneCheck] = ()) -> dict[str, float]:
+    """Each concept is worth CONCEPT_POINTS, shared among all its checks (probes and scenes)."""
     counts: dict[str, int] = {}
-    for p in probes:
-        counts[p.concept] = counts.get(p.concept, 0) + 1
-    return [CONCEPT_POINTS / counts[p.concept] for p in probes]
+    for c in [*probes, *scenes]:
+        counts[c.concept] = counts.get(c.concept, 0) + 1
+    return {concept: CONCEPT_POINTS / n for concept, n in counts.items()}
+
+
+def _scene_name(check: SceneCheck) -> str:
+    return f"scene {check.name}: {check.title}"
+
+
+def _scene_test(
+    check: SceneCheck,
+    points: float,
+    rendered: Rendered,
+    artifacts: Path | None,
+    lesson: str | None = None,
+) -> TestResult:
+    """One scene check's result: every comparison's line, and for an image that differs, a
+    heat map of |difference| written to `artifacts` (beside results.json) when given."""
+    lesson = lesson or check.lesson
+    where = check.scene_path.relative_to(ROOT) if check.scene_path.is_relative_to(ROOT) else ""
+    head = f"**Scene**: {check.title} (`{where}`)\n\n"
+
+    def result(status: str, text: str, kind: str, function: str = "") -> TestResult:
+        score = points if status == "passed" else 0.0
+        return TestResult(_scene_name(check), lesson, check.concept, score, points, status,
+                          head + text, check.visibility, function, kind)  # fmt: skip
+
+    if rendered.kind != "ok":
+        if rendered.kind == "not_implemented":
+            found = re.search(r"not implemented: (\w+)", rendered.message)
+            text = rendered.message.strip().removeprefix("the render: ").removeprefix("rtlab: ")
+            return result("failed", text + ".", "not_implemented", found.group(1) if found else "")
+        what = WHAT.get(rendered.kind, rendered.kind)
+        return result("failed", f"{what} while the scene rendered: {rendered.message}.",
+                      rendered.kind)  # fmt: skip
+    try:
+        refs = references(check, render=os.environ.get("RTLAB_REFERENCES_ONLY") != "1")
+        verdict = judge(check, rendered, refs)
+    except Exception as error:  # the grader's own fault (no references): said, never a crash
+        return result("failed", f"The grader could not compare this scene: {error!r}.",
+                      "grader_error")  # fmt: skip
+    lines = [f"- {line}" for line in verdict.lines]
+    if artifacts is not None:
+        for name, (reference, ours) in verdict.heat_maps.items():
+            path = heat_map_path(artifacts, check, name)
+            try:
+                heat_map(reference, ours, path)
+                lines.append(f"- heat map of |difference| against {name}: `{path.name}`")
+            except Exception as error:  # a heat map that cannot be written loses only itself
+                lines.append(f"- (no heat map: {error})")
+    body = "\n".join(lines)
+    if verdict.ok:
+        return result("passed", "Passed.\n\n" + body, "scene")
+    return result("failed", f"Your image differs ({check.concept}):\n\n{body}\n\n"
+                  f"Hint: {check.hint}.", "scene")  # fmt: skip
+
+
+def _compile_text(build: Build) -> str:
+    text = build.outcome.message
+    if build.outcome.kind == "compile_error":
+        text = (
+            "Your code does not compile; the compiler's first errors:\n\n```\n"
+            + (text.split("\n", 1)[1] if "\n" in text else text)
+            + "\n```"
+        )
+    return text
+
+
+def _write_submission(work: Path, spliced: Splice) -> Path:
+    own = work / "submission"
+    own.mkdir()
+    for name, text in spliced.files.items():
+        (own / name).write_text(text)
+    (own / STUB_HEADER).write_text((HERE / "cpp" / STUB_HEADER).read_text())
+    return own
 
 
 def grade_lesson(
-    submitted: dict[str, Path], lesson: str
+    submitted: dict[str, Path],
+    lesson: str,
+    *,
+    public: bool = False,
+    scenes: bool = True,
+    artifacts: Path | None = None,
 ) -> tuple[list[TestResult], str, list[str]]:
-    probes = lesson_probes(lesson)
-    depends = getattr(_checks(lesson), "DEPENDS", {})
+    """Grade one lesson: its probes and its scene checks (only the visible ones: `public`; no
+    scenes: `scenes` False), from one splice of the student's regions of the lesson. The probe
+    program and the extension are built at the same time (two child processes: the machine's
+    two cores), each once, serving all the lesson's checks of their kind."""
+    probes = [p for p in lesson_probes(lesson) if not public or p.visibility == "visible"]
+    checks = lesson_scenes(lesson) if scenes else []
+    checks = [c for c in checks if not public or c.visibility == "visible"]
+    depends = _depends(lesson)
     spliced = splice(submitted, lesson)
+    points = _points(probes, checks)
     with temporary_work() as tmp:
         work = Path(tmp)
-        own = work / "submission"
-        own.mkdir()
-        for name, text in spliced.files.items():
-            (own / name).write_text(text)
-        (own / STUB_HEADER).write_text((HERE / "cpp" / STUB_HEADER).read_text())
-        build = build_probe(own, probe_source([lesson]), work / "build")
-        if not build.outcome.ok:
-            kind = build.outcome.kind
-            text = build.outcome.message
-            if kind == "compile_error":
-                text = (
-                    "Your code does not compile; the compiler's first errors:\n\n```\n"
-                    + (text.split("\n", 1)[1] if "\n" in text else text)
-                    + "\n```"
-                )
-            tests = _failed_all(lesson, probes, kind, text)
+        own = _write_submission(work, spliced)
+        with ThreadPoolExecutor(max_workers=2) as pool:
+            probe_job = (
+                pool.submit(build_probe, own, probe_source([lesson]), work / "build")
+                if probes
+                else None
+            )
+            ext_job = pool.submit(build_extension, own, work / "ext") if checks else None
+            probe_build = probe_job.result() if probe_job else None
+            ext_build = ext_job.result() if ext_job else None
+        broken = next((b for b in (probe_build, ext_build) if b and not b.outcome.ok), None)
+        if broken is not None:
+            tests = _failed_all(lesson, probes, broken.outcome.kind, _compile_text(broken),
+                                checks)  # fmt: skip
             return tests, diagnose(lesson, tests, depends), spliced.notes
-        ran = run_probes(build, probes, work / "build")
-    points = _points(probes)
-    tests = [
-        _probe_test(p, points[i], *ran.get(i, ("not_run", "not run"))) for i, p in enumerate(probes)
-    ]
+        ran = run_probes(probe_build, probes, work / "build") if probe_build else {}
+        rendered = render_student(ext_build, checks, work / "renders") if ext_build else []
+        tests = [
+            _probe_test(p, points[p.concept], *ran.get(i, ("not_run", "not run")))
+            for i, p in enumerate(probes)
+        ]
+        tests += [
+            _scene_test(c, points[c.concept], r, artifacts)
+            for c, r in zip(checks, rendered, strict=True)
+        ]
     return tests, diagnose(lesson, tests, depends), spliced.notes
+
+
+INTEGRATION = "integration"
+INTEGRATION_CONCEPT = "all your lessons together: the simple ray tracing algorithm"
+# The lecture's Ex 25 scene (tracer/scenes/ex25.toml: spheres, a plane, two lights, shadows,
+# Phong highlights and the reflection chain), small: 81 x 61 pixels.
+INTEGRATION_SCENE = SceneCheck(
+    INTEGRATION,
+    "ex25",
+    INTEGRATION_CONCEPT,
+    "the lecture's Ex 25 scene, rendered with all your lessons together",
+    path=ROOT / "tracer" / "scenes" / "ex25.toml",
+    size=(81, 61),
+    hint="each lesson's checks above say which part is wrong",
+)
+
+
+def integration_test(submitted: dict[str, Path], artifacts: Path | None) -> TestResult | None:
+    """The final check: every region the submission holds and has written (of every lesson),
+    the student's, together on the Ex 25 scene, against POV-Ray and Mitsuba. It is worth no
+    points: a mistake it shows is charged once, by its own lesson's checks; it shows whether
+    the student's whole tracer makes the lecture's picture. None when no region was written."""
+    spliced = splice(submitted, None)
+    if not spliced.files:
+        return None
+    with temporary_work() as tmp:
+        work = Path(tmp)
+        build = build_extension(_write_submission(work, spliced), work / "ext")
+        if not build.outcome.ok:
+            rendered = Rendered(build.outcome.kind, _compile_text(build))
+        else:
+            rendered = render_student(build, [INTEGRATION_SCENE], work / "renders")[0]
+        test = _scene_test(INTEGRATION_SCENE, 0.0, rendered, artifacts)
+    yours = ", ".join(sorted(spliced.taken)) or "none"
+    test.output += (
+        f"\n\nYour code of {yours} together, the course's solution elsewhere. (Worth no "
+        "points: each mistake it shows is charged once, by its lesson's checks.)"
+    )
+    return test
 
 
 def touched_lessons(submitted: dict[str, Path]) -> list[str]:
@@ -500,12 +697,24 @@ def touched_lessons(submitted: dict[str, Path]) -> list[str]:
     return chosen
 
 
-def grade(submission: str | Path, lesson: str | None = None) -> Result:
+def grade(
+    submission: str | Path,
+    lesson: str | None = None,
+    *,
+    public: bool = False,
+    scenes: bool = True,
+    integration: bool = True,
+    artifacts: str | Path | None = None,
+) -> Result:
     """Grade a submission directory (C++ files named as in tracer/cpp/, in DIR or DIR/cpp) on
-    one lesson, or on every lesson its files touch. Never raises for a bad submission: the
-    Result says what is wrong."""
+    one lesson, or on every lesson its files touch, then (`integration`) all the student's
+    lessons together on one scene. `public`: only the visible checks (a student's self-check);
+    `scenes` False: probes only; `artifacts`: a directory for the heat maps of failing scenes
+    (the CLI gives the one results.json is written to). Never raises for a bad submission:
+    the Result says what is wrong."""
     start = time.monotonic()
     submission = Path(submission)
+    out = Path(artifacts) if artifacts is not None else None
     if lesson is not None:
         get_lesson(lesson)  # an unknown id is the caller's error: UnknownLessonError
         if lesson not in lessons_with_checks():
@@ -518,6 +727,13 @@ def grade(submission: str | Path, lesson: str | None = None) -> Result:
         if submission.is_dir()
         else {}
     )
+
+    def visible(each: str) -> tuple[list[Probe], list[SceneCheck]]:
+        probes = [p for p in lesson_probes(each) if not public or p.visibility == "visible"]
+        checks = [c for c in (lesson_scenes(each) if scenes else [])
+                  if not public or c.visibility == "visible"]  # fmt: skip
+        return probes, checks
+
     if not submitted:
         what = (
             "is not a directory"
@@ -527,8 +743,9 @@ def grade(submission: str | Path, lesson: str | None = None) -> Result:
         lessons_ = [lesson] if lesson else lessons_with_checks()[:1]
         result.lessons = lessons_
         for each in lessons_:
+            probes, checks = visible(each)
             result.tests += _failed_all(
-                each, lesson_probes(each), "empty", f"Nothing to grade: the submission {what}."
+                each, probes, "empty", f"Nothing to grade: the submission {what}.", checks
             )
         result.diagnosis = (
             f"{', '.join(lessons_)}: nothing to grade: the submission `{submission.name}` {what}."
@@ -539,15 +756,31 @@ def grade(submission: str | Path, lesson: str | None = None) -> Result:
     diagnoses = []
     for each in result.lessons:
         try:
-            tests, diagnosis, notes = grade_lesson(submitted, each)
+            tests, diagnosis, notes = grade_lesson(
+                submitted, each, public=public, scenes=scenes, artifacts=out
+            )
         except Exception as error:  # the grader's own fault: still a result, never a crash
+            probes, checks = visible(each)
             tests = _failed_all(
-                each, lesson_probes(each), "grader_error", f"The grader failed: {error!r}"
+                each, probes, "grader_error", f"The grader failed: {error!r}", checks
             )
             diagnosis, notes = f"{each}: the grader failed: {error!r}", []
         result.tests += tests
         result.notes += notes
         diagnoses.append(diagnosis)
+    if integration and scenes:
+        try:
+            test = integration_test(submitted, out)
+        except Exception as error:  # the grader's own fault: said, never a crash
+            result.notes.append(f"The integration check could not run: {error!r}")
+            test = None
+        if test is not None:
+            result.tests.append(test)
+            if test.status == "failed":
+                result.notes.append(
+                    f"Integration: your lessons together do not render the Ex 25 scene as "
+                    f"POV-Ray and Mitsuba do (see the check {test.name!r})."
+                )
     broken = [d for d in diagnoses if "all " not in d.split("\n", 1)[0]]
     result.diagnosis = "\n\n".join(broken + [d for d in diagnoses if d not in broken])
     result.execution_time = time.monotonic() - start

@@ -129,18 +129,22 @@ def _earlier_regions(from_dir: Path) -> dict[tuple[str, str, str], Region]:
 
 
 MAKEFILE = """\
-# Build check of the tree: every header compiles on its own with the core's warning flags.
+# `make`: every header compiles on its own with the core's warning flags.
+# `make check`: the public checks of lesson {id} on your code (rtlab lesson grade --public).
 CXX ?= c++
 FLAGS := {flags}
 HEADERS := $(sort $(wildcard cpp/*.h))
+RTLAB ?= rtlab
 
-.PHONY: all check
-all: check
-check:
+.PHONY: all build check
+all: build
+build:
 \t@for h in $(HEADERS); do \\
 \t  echo '#include "'$$(basename $$h)'"' | $(CXX) $(FLAGS) -Icpp -fsyntax-only -x c++ - \\
 \t    || {{ echo "make: $$h does not compile" >&2; exit 1; }}; \\
 \tdone; echo "make: every header of cpp/ compiles"
+check: build
+\t$(RTLAB) lesson grade . --lesson {id} --public --json check/results.json
 """
 
 README = """\
@@ -167,6 +171,16 @@ lesson and name. Functions of later lessons are stubbed too; earlier lessons hol
 ## Build
 
     make        # every header compiles on its own, warning-free (-Wall -Wextra -Werror)
+
+## Check yourself
+
+    make check  # the public checks of {id}: rtlab lesson grade . --lesson {id} --public
+
+It builds your code in a sandbox and runs the lesson's public checks: probes of your functions
+(the inputs, what was expected, what came) and small scenes compared with POV-Ray's and
+Mitsuba's images (where the pixels differ, and a heat map in `check/`). Its first line names the
+concept that is wrong. The final grade adds hidden variants (other values, other scenes) of the
+same checks, so code that passes for the right reason passes them too.
 
 ## Hand in
 
@@ -198,7 +212,7 @@ def write_student_tree(
         shutil.copyfile(SUPPORT, tmp / "cpp" / STUB_HEADER)
         if info.text_path.exists():
             shutil.copyfile(info.text_path, tmp / "lesson.md")
-        (tmp / "Makefile").write_text(MAKEFILE.format(flags=FLAGS))
+        (tmp / "Makefile").write_text(MAKEFILE.format(flags=FLAGS, id=info.id))
         earlier_text = (
             "your own code, carried from " + str(from_dir)
             if from_dir is not None

@@ -184,6 +184,7 @@ SUITES: dict[str, Callable[..., list[dict[str, Any]]]] = {
     "classic": suite_classic,
     "geometry": suite_geometry,
     "convergence": suite_convergence,
+    "grading": lambda: __import__("lessons.bench").bench.suite_grading(),  # lessons/bench.py
 }
 
 

@@ -1,8 +1,7 @@
-// What every lesson's probes (its probes.h, e.g. lessons/L02_sphere/probes.h) share: the
-// arguments of a probe as exact doubles, the values it returns printed exactly (%a), and the
-// table of probes by function name. The grader (lessons/grader.py) builds one program from
-// this file, the probes.h of the lessons it grades and probe_main.cpp, concatenated in that
-// order.
+// What every lesson's probes (each lesson folder's probes.h) share: the arguments of a probe as
+// exact doubles, the values it returns printed exactly (%a), and the table of probes by function
+// name. The grader (lessons/grader.py) builds one program from this file, the probes.h of the
+// lessons it grades and probe_main.cpp, concatenated in that order.
 #include <cstdio>
 #include <map>
 #include <string>

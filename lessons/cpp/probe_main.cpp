@@ -10,7 +10,7 @@
 // at once, so that a crash or a hang names the probe that was running and the grader can go on
 // from the next one. A stub (rt::NotImplemented) is caught and reported per probe.
 // The probes themselves are in lessons/cpp/probe.h (what they share) and each graded lesson's
-// probes.h (RT_PROBE(function) { ... }; e.g. lessons/L02_sphere/probes.h), placed before this file.
+// each lesson folder's probes.h (RT_PROBE(function) { ... }), placed before this file.
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>

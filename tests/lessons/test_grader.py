@@ -1,7 +1,15 @@
 """The grader (lessons/grader.py): the solution scores full marks, a stub tree scores zero and
 says "not implemented", every known-wrong version (lessons/Lnn_*/mistakes/) is caught and named
 by its concept, and hostile submissions (compile error, crash, hang, flood, nothing to grade)
-each give a results.json that says what happened. Each grade() is one probe build."""
+each give a results.json that says what happened.
+
+Cost: a grade() with scenes builds the probe program and the extension at once (about 3 s and
+4.7 s of CPU at -O1) and renders the lesson's scenes; probes only (scenes=False) is one probe
+build. Every mistake is graded on its probes; the mistakes of SCENE_MISTAKES, one per lesson
+whose mistake changes the picture, are graded with the scenes too and must fail a scene of
+their concept: the scene checks' power is shown once per lesson, and the suite stays within its
+budget (22 mistakes x 8 s of builds on 2 cores would add three minutes for no new kind of
+evidence)."""
 
 from __future__ import annotations
 
@@ -15,13 +23,22 @@ import pytest
 
 from lessons import grade
 from lessons.catalog import get_lesson
-from lessons.grader import lesson_probes, lessons_with_checks
+from lessons.grader import INTEGRATION, lesson_probes, lessons_with_checks
 from lessons.markers import parse
 from lessons.mistakes import Mistake, mistakes, mutated_text, write_mistake
+from lessons.scene_checks import lesson_scenes
 from lessons.student import CORE, write_student_tree
 
-GRADED = tuple(lessons_with_checks())  # every lesson with a checks.py
+GRADED = tuple(lessons_with_checks())  # probes (checks.py) or scenes (scenes/__init__.py)
+PROBED = tuple(i for i in GRADED if (get_lesson(i).folder / "checks.py").exists())
 MISTAKES = [m for lesson in GRADED for m in mistakes(lesson)]
+# Graded with their lesson's scenes too (see the docstring): each changes the picture.
+SCENE_MISTAKES = {
+    ("L02", "t1_before_t0"),
+    ("L03", "sign_of_a_minus_o"),
+    ("L04", "normal_not_turned"),
+    ("L06", "phong_unclamped"),
+}
 
 
 def _solution(tmp_path: Path) -> Path:
@@ -32,16 +49,32 @@ def _solution(tmp_path: Path) -> Path:
 
 @pytest.mark.parametrize("lesson", GRADED)
 def test_the_solution_scores_full_marks(tmp_path: Path, lesson: str) -> None:
-    result = grade(_solution(tmp_path), lesson=lesson)
+    result = grade(_solution(tmp_path), lesson=lesson, artifacts=tmp_path)
     failed = [(t.name, t.output) for t in result.tests if t.status == "failed"]
     assert failed == []
     assert result.score == result.max_score > 0
     assert result.diagnosis.startswith(f"{lesson} (")
     assert "all" in result.diagnosis.split("\n")[0]
+    # The scenes ran, against both references, and the integration check closed the grade.
+    scenes = [t for t in result.tests if t.kind == "scene" and t.lesson == lesson]
+    assert len(scenes) == len(lesson_scenes(lesson))
+    assert all("against POV-Ray: agrees" in t.output for t in scenes)
+    assert all("against Mitsuba: agrees" in t.output for t in scenes)
+    assert result.tests[-1].lesson == INTEGRATION and result.tests[-1].status == "passed"
+    assert not list(tmp_path.glob("*.png"))  # no heat map for a scene that agrees
+
+
+def test_every_lesson_with_scenes_has_public_and_hidden_ones() -> None:
+    scened = [lesson for lesson in GRADED if lesson_scenes(lesson)]
+    assert {"L02", "L03", "L04", "L05", "L06", "L07"} <= set(scened)
+    for lesson in scened:
+        checks = lesson_scenes(lesson)
+        assert {c.visibility for c in checks} == {"visible", "after_published"}
+        assert {c.concept for c in checks} <= set(get_lesson(lesson).concepts)
 
 
 def test_every_lesson_has_public_and_hidden_probes_of_every_concept() -> None:
-    for lesson in GRADED:
+    for lesson in PROBED:
         probes = lesson_probes(lesson)
         assert {p.concept for p in probes} == set(get_lesson(lesson).concepts)
         assert {p.visibility for p in probes} == {"visible", "after_published"}
@@ -55,7 +88,10 @@ def test_the_l04_student_tree_scores_zero_not_implemented(tmp_path: Path) -> Non
     assert result.diagnosis.startswith("L04: not implemented: ")
     for name in ("ambient_term()", "lambert_term()", "to_light()", "face_the_ray()"):
         assert name in result.diagnosis.split("\n")[0]
-    assert all("not implemented" in t.output for t in result.tests)
+    mine = [t for t in result.tests if t.lesson == "L04"]
+    assert all("not implemented" in t.output for t in mine)
+    assert {t.kind for t in mine} == {"not_implemented"}
+    assert any(t.kind == "not_implemented" for t in mine if t.name.startswith("scene "))
     # Without --lesson: the stubbed lesson the tree starts with.
     assert grade(tmp_path / "hw04").lessons == ["L04"]
 
@@ -71,11 +107,21 @@ def test_a_known_wrong_version_is_caught_and_named(tmp_path: Path, mistake: Mist
     assert changed == [(mistake.file, mistake.lesson, mistake.function)]
 
     write_mistake(mistake, tmp_path / "sub")
-    result = grade(tmp_path / "sub", lesson=mistake.lesson)
+    with_scenes = (mistake.lesson, mistake.name) in SCENE_MISTAKES
+    result = grade(
+        tmp_path / "sub", lesson=mistake.lesson, scenes=with_scenes, integration=False,
+        artifacts=tmp_path,
+    )  # fmt: skip
     failed = [t for t in result.tests if t.status == "failed"]
     mine = [t for t in failed if t.concept == mistake.concept]
     assert mine, f"no check of {mistake.concept!r} caught {mistake.name}"
-    assert all(t.kind == "probe" for t in failed)  # wrong values, not crashes or stubs
+    assert all(t.kind in ("probe", "scene") for t in failed)  # wrong values, not crashes
+    if with_scenes:
+        # A scene of its concept fails, says where, and left a heat map beside the results.
+        scene = next(t for t in mine if t.kind == "scene")
+        assert "**differs**" in scene.output and "failing pixels in x " in scene.output
+        maps = list(tmp_path.glob(f"{mistake.lesson}-*.png"))
+        assert maps and all(f"`{m.name}`" in "".join(t.output for t in failed) for m in maps)
     assert result.diagnosis.split("\n")[0].startswith(
         f"{mistake.lesson}: wrong: {mistake.concept} ("
     )
@@ -96,7 +142,7 @@ def test_a_known_wrong_version_is_caught_and_named(tmp_path: Path, mistake: Mist
     # Without --lesson the grader finds the lesson the edit touches (once per lesson: each
     # grade() is a build).
     if mistake == mistakes(mistake.lesson)[0]:
-        assert grade(tmp_path / "sub").lessons == [mistake.lesson]
+        assert grade(tmp_path / "sub", scenes=False).lessons == [mistake.lesson]
 
 
 def _sphere_with(tmp_path: Path, old: str, new: str) -> Path:
@@ -156,8 +202,9 @@ def test_a_hostile_submission_gives_a_clear_results_file(
         # Charged to the probe that ran (o.z > -2), not to those before it: a probe from
         # o.z = -3 passes.
         assert data["tests"][0]["status"] == "passed"
-        first = data["tests"].index(caught[0])
-        later = data["tests"][first + 1 :]
+        probes = [t for t in data["tests"] if not t["name"].startswith("scene ")]
+        first = probes.index(caught[0])
+        later = probes[first + 1 :]
         if name == "crash":  # the program went on after it: a later probe ran and passed
             assert any(t["status"] == "passed" for t in later)
         else:  # two hangs cost their limits; the rest are not run (MAX_HANGS)
@@ -186,6 +233,9 @@ def test_results_json_follows_gradescope(tmp_path: Path) -> None:
     assert set(data) >= {"score", "execution_time", "output", "tests"}
     assert data["output"].startswith("L04: wrong: diffuse (Lambertian) reflection N.L")
     assert data["score"] == pytest.approx(sum(t["score"] for t in data["tests"]))
+    # The last test is the integration check: worth nothing (a mistake is charged once).
+    last = data["tests"].pop()
+    assert last["tags"] == [INTEGRATION, last["tags"][1]] and last["max_score"] == 0
     for test in data["tests"]:
         assert set(test) >= {"name", "number", "score", "max_score", "status", "tags", "output",
                              "visibility"}  # fmt: skip
@@ -198,8 +248,8 @@ def test_results_json_follows_gradescope(tmp_path: Path) -> None:
         per[test["tags"][1]] = per.get(test["tags"][1], 0) + test["max_score"]
     assert set(per) == set(get_lesson("L04").concepts)
     # results.json rounds each test's points to 4 decimals: a concept's sum is 10 within
-    # 6 probes x 0.00005.
-    assert all(v == pytest.approx(10, abs=3e-4) for v in per.values())
+    # 7 checks (probes and scenes) x 0.00005.
+    assert all(v == pytest.approx(10, abs=4e-4) for v in per.values())
     assert 0 < data["score"] < sum(per.values())
 
 
@@ -229,8 +279,8 @@ def test_grading_one_lesson_takes_only_its_regions(tmp_path: Path) -> None:
     )
     assert broken != sphere
     (sub / "05_sphere.h").write_text(broken)
-    l04 = grade(sub, lesson="L04")
+    l04 = grade(sub, lesson="L04", integration=False)
     assert l04.score == l04.max_score
-    l03 = grade(sub, lesson="L03")
+    l03 = grade(sub, lesson="L03", scenes=False)
     assert l03.diagnosis.startswith("L03: wrong: the plane (p - a).n = 0")
-    assert grade(sub).lessons == ["L02", "L03"]
+    assert grade(sub, scenes=False).lessons == ["L02", "L03"]

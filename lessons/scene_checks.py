@@ -1,0 +1,503 @@
+"""Scene checks (kinds (b) and (c) of issue 9's part 5): small scenes built to isolate one
+concept, rendered with the student's extension (the one-ray tracer, never packets) in a child
+process, and compared with
+
+- POV-Ray's and Mitsuba's images, under the reference suite's own rule and tolerances
+  (reference/metrics.py: ``agrees``, FLOAT32_SLACK on POV-Ray's per-pixel output precision,
+  MITSUBA_TOLERANCE; MAX_SHARE_OVER of the pixels, scaled to the image's width as
+  tests/reference/test_against_references.py argues for its 64-pixel images);
+- analytic values of chosen pixels (closed forms written in the lesson's scenes module);
+- (c) the ``aov`` output (what each primary ray hits, how far, with which normal) against
+  Mitsuba's own ``aov`` integrator, with tests/reference/test_geometry_references.py's
+  tolerances, and the ray counts (primary: one per pixel; shadow: one per light in front of
+  each lit primary hit, counted from Mitsuba's hits).
+
+A lesson's scene checks are data: ``lessons/Lnn_name/scenes/*.toml`` (scene files in the scene
+language) and ``the lesson folder's scenes/__init__.py``, whose ``SCENES`` list names each
+scene's concept, visibility, references and analytic values (lessons/README.md).
+
+The references are rendered by POV-Ray and Mitsuba once and cached in ``reference_dir()``
+(build/lesson-references, or $RTLAB_REFERENCES), keyed by the scene's text and the digest of the
+converters' and runners' sources: a change to either renders them again. Never our own
+solution's image: the reference is theirs.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib
+import json
+import math
+import os
+import secrets
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from lessons.catalog import get_lesson
+from lessons.probe import HIDDEN
+from lessons.sandbox import Build, Limits, run_limited
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+
+# The sources that turn a scene into a reference image: a change to any renders it again.
+REFERENCE_SOURCES = (
+    "converters/povray.py",
+    "converters/mitsuba/*.py",
+    "converters/pyrender.py",
+    "reference/povray.py",
+    "reference/mitsuba.py",
+    "reference/geometry.py",
+    "tracer/scene/*.py",
+)
+REFERENCE_NAMES = ("povray", "mitsuba")
+# The reference suite's images are 160 pixels wide; silhouette pixels grow with an image's
+# width, all pixels with its area, so at width w the same silhouettes are a 160 / w times
+# larger share (the argument of tests/reference/test_against_references.py's scalar test).
+REFERENCE_WIDTH = 160
+# A child renders every scene of a check in a few tenths of a second; a student's loop that
+# never ends is stopped after 20 s of CPU; 4 GiB of address space as render_in_child argues.
+RENDER_LIMITS = Limits(cpu_s=20, wall_s=60.0, memory_bytes=4 << 30)
+
+
+@dataclass(frozen=True)
+class Analytic:
+    """A value at one pixel (x right, y down, from 0) known in closed form: ``what`` is
+    "color" (the classic render's RGB), "depth" (the distance along the primary ray) or
+    "normal" (the aov's front-side normal); ``tolerance`` absolute, argued in ``why``."""
+
+    x: int
+    y: int
+    what: str
+    expected: tuple[float, ...]
+    tolerance: float
+    why: str
+
+
+@dataclass(frozen=True)
+class SceneCheck:
+    lesson: str
+    name: str  # the scene file's stem, unique in the lesson
+    concept: str  # one of the lesson's concepts (lessons/catalog.py)
+    title: str  # what the scene shows, as the student reads it
+    visibility: str = "visible"  # or HIDDEN ("after_published")
+    references: tuple[str, ...] = REFERENCE_NAMES
+    aov: bool = True  # compare what is hit, where and with which normal with Mitsuba's aov
+    rays: bool = True  # compare the ray counts with the ones Mitsuba's hits imply
+    analytic: tuple[Analytic, ...] = ()
+    hint: str = ""
+    path: Path | None = None  # the scene file (default: the lesson's scenes/<name>.toml)
+    size: tuple[int, int] | None = None  # (width, height) overriding the file's
+
+    @property
+    def scene_path(self) -> Path:
+        if self.path is not None:
+            return self.path
+        return get_lesson(self.lesson).folder / "scenes" / f"{self.name}.toml"
+
+    def load(self):  # noqa: ANN201 - a tracer.Scene
+        import tracer
+
+        scene = tracer.load_scene(self.scene_path)
+        if self.size is not None:
+            scene = scene.with_overrides(width=self.size[0], height=self.size[1])
+        return scene
+
+
+class SceneCheckError(ValueError):
+    """A lesson's scenes module that names an unknown concept, a missing file, a bad value."""
+
+
+def lesson_scenes(lesson: str) -> list[SceneCheck]:
+    """The lesson's scene checks (``SCENES`` of the lesson folder's scenes/__init__.py), or []."""
+    info = get_lesson(lesson)
+    if not (info.folder / "scenes" / "__init__.py").exists():
+        return []
+    module = importlib.import_module(f"lessons.{info.id}_{info.name}.scenes")
+    checks: list[SceneCheck] = list(module.SCENES)
+    names = set()
+    for check in checks:
+        where = f"{info.folder.relative_to(ROOT)}/scenes/__init__.py: scene {check.name!r}"
+        if check.lesson != lesson:
+            raise SceneCheckError(f"{where}: lesson {check.lesson!r}, expected {lesson!r}")
+        if check.concept not in info.concepts:
+            raise SceneCheckError(
+                f"{where}: unknown concept {check.concept!r}; expected one of "
+                + "; ".join(info.concepts)
+            )
+        if check.visibility not in ("visible", HIDDEN):
+            raise SceneCheckError(f"{where}: visibility {check.visibility!r}")
+        if not check.scene_path.exists():
+            raise SceneCheckError(f"{where}: no scene file {check.scene_path}")
+        unknown = set(check.references) - set(REFERENCE_NAMES)
+        if unknown:
+            raise SceneCheckError(f"{where}: unknown references {sorted(unknown)}")
+        if check.name in names:
+            raise SceneCheckError(f"{where}: a second scene of that name")
+        names.add(check.name)
+    return checks
+
+
+# --- the references: rendered by POV-Ray and Mitsuba once, cached -------------------------
+
+
+def reference_dir() -> Path:
+    return Path(os.environ.get("RTLAB_REFERENCES") or ROOT / "build" / "lesson-references")
+
+
+def sources_digest() -> str:
+    h = hashlib.sha256()
+    for pattern in REFERENCE_SOURCES:
+        for path in sorted(ROOT.glob(pattern)):
+            h.update(str(path.relative_to(ROOT)).encode() + b"\0" + path.read_bytes())
+    return h.hexdigest()
+
+
+def reference_key(check: SceneCheck) -> str:
+    h = hashlib.sha256()
+    h.update(check.scene_path.read_bytes())
+    h.update(repr(check.size).encode())
+    h.update(sources_digest().encode())
+    return h.hexdigest()[:20]
+
+
+def reference_file(check: SceneCheck) -> Path:
+    return reference_dir() / check.lesson / f"{check.name}-{reference_key(check)}.npz"
+
+
+def render_references(check: SceneCheck) -> dict[str, np.ndarray]:
+    """POV-Ray's image and per-pixel bound, Mitsuba's image (llvm_ad_rgb, as the reference
+    suite) and Mitsuba's aov (scalar_rgb: depth, object id, normal)."""
+    from reference.geometry import mitsuba_geometry
+    from reference.mitsuba import run_mitsuba
+    from reference.povray import run_povray
+
+    scene = check.load()
+    pov = run_povray(scene, threads=2)
+    out: dict[str, np.ndarray] = {"povray": pov.image, "povray_bound": pov.error_bound}
+    geometry = mitsuba_geometry(scene)
+    out["aov_depth"] = geometry.depth
+    out["aov_id"] = geometry.object_id
+    assert geometry.normal is not None
+    out["aov_normal"] = geometry.normal
+    out["mitsuba"] = run_mitsuba(scene, variant="llvm_ad_rgb", warm=False).image
+    return out
+
+
+def references(check: SceneCheck, render: bool = True) -> dict[str, np.ndarray]:
+    """The cached references of a scene, rendered first where missing (``render``); the file
+    is written atomically, so a half-written one is never read."""
+    path = reference_file(check)
+    if not path.exists():
+        if not render:
+            raise FileNotFoundError(
+                f"{path}: no pre-rendered references for {check.lesson} {check.name}"
+            )
+        images = render_references(check)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        partial = path.with_name(f".{path.stem}.{os.getpid()}.{secrets.token_hex(4)}.npz")
+        np.savez_compressed(partial, **images)
+        os.replace(partial, path)
+    with np.load(path, allow_pickle=False) as data:
+        return {k: data[k] for k in data.files}
+
+
+# --- the student's renders, in a child process ------------------------------------------
+
+# Loads the built extension as tracer._core and, for each job from the first, renders the
+# classic image (one ray at a time: packets=False, the student's code as written) and the aov,
+# saving them with the ray counts; a line with the token before and after each, so that a
+# crash is charged to the scene that was rendering. The tracer package is the one in ROOT (the
+# child's directory), never an editable install's: an unpacked autograder runs its own.
+RENDER_CHILD = """
+import importlib.util, json, sys
+sys.meta_path[:] = [f for f in sys.meta_path if not type(f).__module__.startswith("_editable")]
+import numpy as np
+spec = importlib.util.spec_from_file_location("tracer._core", sys.argv[1])
+core = importlib.util.module_from_spec(spec)
+sys.modules["tracer._core"] = core
+spec.loader.exec_module(core)
+from tracer.render import render_with_stats
+from tracer.scene import load_scene
+jobs = json.loads(open(sys.argv[2]).read())
+token = sys.argv[3]
+for k in range(int(sys.argv[4]), len(jobs)):
+    job = jobs[k]
+    print(token, "begin", k, flush=True)
+    scene = load_scene(job["scene"])
+    if job["size"]:
+        scene = scene.with_overrides(width=job["size"][0], height=job["size"][1])
+    result = render_with_stats(scene, threads=2, progress=False, packets=False)
+    aov = render_with_stats(scene.with_overrides(integrator="aov"), threads=2, progress=False)
+    np.savez(job["out"], image=result.image, aov=aov.image,
+             rays=np.array(json.dumps(result.rays)))
+    print(token, "done", k, flush=True)
+"""
+
+
+@dataclass
+class Rendered:
+    kind: str  # "ok", or the outcome's kind: not_implemented, crash, hang, memory, flood, ...
+    message: str = ""
+    image: npt.NDArray[np.float32] | None = None
+    aov: npt.NDArray[np.float32] | None = None
+    rays: dict[str, int] = field(default_factory=dict)
+
+
+def render_student(build: Build, checks: list[SceneCheck], work: Path) -> list[Rendered]:
+    """Render every check's scene with the built extension; a scene that crashed, hung or
+    flooded is charged alone and the child starts again from the next one."""
+    assert build.binary is not None
+    work.mkdir(parents=True, exist_ok=True)
+    jobs = [
+        {"scene": str(c.scene_path), "size": c.size, "out": str(work / f"scene{k}.npz")}
+        for k, c in enumerate(checks)
+    ]
+    job_file = work / "scenes.json"
+    job_file.write_text(json.dumps(jobs))
+    token = "@rtlab-" + secrets.token_hex(8)
+    results: dict[int, Rendered] = {}
+    first = 0
+    while first < len(checks):
+        command = [sys.executable, "-c", RENDER_CHILD, str(build.binary), str(job_file), token,
+                   str(first)]  # fmt: skip
+        outcome = run_limited(command, ROOT, RENDER_LIMITS, "the render")
+        done, begun = set(), None
+        for line in outcome.output.splitlines():
+            words = line.split()
+            if len(words) == 3 and words[0] == token and words[2].isdigit():
+                if words[1] == "begin":
+                    begun = int(words[2])
+                elif words[1] == "done":
+                    done.add(int(words[2]))
+        for k in done:
+            with np.load(jobs[k]["out"], allow_pickle=False) as data:
+                results[k] = Rendered(
+                    "ok", "", data["image"], data["aov"], json.loads(str(data["rays"]))
+                )
+        if outcome.ok:
+            break
+        if begun is None or begun in done:  # before the first scene (loading) or at exit
+            for k in range(first, len(checks)):
+                results.setdefault(k, Rendered(outcome.kind, _message(outcome)))
+            break
+        results[begun] = Rendered(outcome.kind, _message(outcome))
+        first = begun + 1
+    return [results.get(k, Rendered("not_run", "not run")) for k in range(len(checks))]
+
+
+def _message(outcome: Any) -> str:
+    if outcome.kind == "failed":  # a Python error in the child: its last line says which
+        lines = [ln for ln in outcome.output.splitlines() if ln.strip()]
+        return f"{outcome.message}: {lines[-1] if lines else ''}"
+    return outcome.message
+
+
+# --- the comparisons ---------------------------------------------------------------------
+
+
+@dataclass
+class Verdict:
+    ok: bool
+    lines: list[str]  # Markdown bullet lines, each one comparison
+    heat_maps: dict[str, tuple[np.ndarray, np.ndarray]]  # name -> (reference, student image)
+
+
+def share_bound(width: int) -> float:
+    from reference.metrics import MAX_SHARE_OVER
+
+    return MAX_SHARE_OVER * max(1.0, REFERENCE_WIDTH / width)
+
+
+def _rgb(v: np.ndarray) -> str:
+    return "(" + ", ".join(f"{float(c):.4g}" for c in v) + ")"
+
+
+def _where(mask: np.ndarray) -> str:
+    ys, xs = np.nonzero(mask)
+    return f"x {xs.min()}..{xs.max()}, y {ys.min()}..{ys.max()}"
+
+
+def compare_image(
+    name: str, reference: np.ndarray, ours: np.ndarray, tolerance: Any, share: float
+) -> tuple[bool, str]:
+    """The reference suite's rule (metrics.agrees), and where it fails: the share of pixels
+    over tolerance, their bounding box, and the worst pixel's expected and got colours."""
+    from reference.metrics import agrees, over_tolerance
+
+    ok, text = agrees(reference, ours, tolerance, share)
+    if ok:
+        return True, f"against {name}: agrees ({text}; at most {100 * share:.3g}% allowed)"
+    mask = over_tolerance(reference, ours, tolerance)
+    diff = np.abs(np.asarray(reference, np.float64) - np.asarray(ours, np.float64)).max(-1)
+    diff = np.where(np.isfinite(diff), diff, np.inf)
+    y, x = np.unravel_index(int(np.argmax(diff)), diff.shape)
+    where = f"; failing pixels in {_where(mask)}" if mask.any() else ""
+    return False, (
+        f"against {name}: **differs**: {text} (at most {100 * share:.3g}% may){where}; "
+        f"worst pixel ({x}, {y}): expected {_rgb(reference[y, x])}, got {_rgb(ours[y, x])}"
+    )
+
+
+def compare_aov(refs: dict[str, np.ndarray], aov: np.ndarray, share: float) -> tuple[bool, str]:
+    """What each primary ray hits, how far and with which normal, against Mitsuba's aov, with
+    tests/reference/test_geometry_references.py's tolerances: other objects seen in at most
+    the share of silhouette pixels; depth within 1e-4 relative (float32 intersection ~1e-6)
+    and normals within 1e-3 rad (float32: 1e-6) for 99% of the pixels that see the same."""
+    ids = np.rint(aov[..., 1]).astype(np.int64)
+    depth = aov[..., 0].astype(np.float64)
+    normal = aov[..., 2:5].astype(np.float64)
+    their_ids = refs["aov_id"]
+    differ = ids != their_ids
+    problems = []
+    if differ.mean() > share:
+        y, x = np.argwhere(differ)[0]
+        problems.append(
+            f"{int(differ.sum())} pixels see another object than Mitsuba's primary rays "
+            f"(in {_where(differ)}; e.g. pixel ({x}, {y}): object {ids[y, x]}, expected "
+            f"{their_ids[y, x]}; -1 is nothing)"
+        )
+    both = ~differ & (ids >= 0)
+    if both.any():
+        rel = np.abs(depth[both] - refs["aov_depth"][both]) / refs["aov_depth"][both]
+        rel = np.where(np.isfinite(rel), rel, np.inf)
+        if (rel <= 1e-4).mean() < 0.99:
+            problems.append(
+                f"the hit's distance differs from Mitsuba's by more than 1e-4 (relative) in "
+                f"{int((rel > 1e-4).sum())} pixels (worst {float(rel.max()):.3g})"
+            )
+        cos = np.sum(normal * refs["aov_normal"], axis=-1)[both]
+        if (cos >= math.cos(1e-3)).mean() < 0.99:
+            worst = math.degrees(math.acos(max(-1.0, min(1.0, float(np.nanmin(cos))))))
+            problems.append(
+                f"the normal differs from Mitsuba's by more than 1e-3 rad in "
+                f"{int((cos < math.cos(1e-3)).sum())} pixels (worst {worst:.3g} degrees)"
+            )
+    if problems:
+        return False, "what is hit (aov): **differs**: " + "; ".join(problems)
+    return True, "what is hit (aov): the same objects, distances and normals as Mitsuba's"
+
+
+def expected_rays(scene: Any, refs: dict[str, np.ndarray]) -> tuple[dict[str, int], int]:
+    """Primary rays: one per pixel (spp = 1). Shadow rays, in a scene without mirrors: one per
+    light in front of each primary hit whose material has a light term (10_classic.h's
+    local_color()), counted from Mitsuba's hits and normals; hits where |N.L| < 1e-6 may go
+    either way (float32 against double): the second value is their number, the slack."""
+    from tracer.scene import PointLight
+
+    cam = scene.camera
+    counts = {"primary": cam.width * cam.height * scene.render.spp}
+    if any(m.reflectivity > 0 for m in scene.materials.values()) and scene.render.max_depth > 1:
+        return counts, 0
+    ids = refs["aov_id"]
+    hit = ids >= 0
+    depth = np.where(hit, refs["aov_depth"], 0.0)
+    eye = np.array(cam.eye, dtype=np.float64)
+    # Primary directions through pixel centres (03_camera.h's primary_ray()).
+    forward = np.array(cam.look_at) - eye
+    forward /= np.linalg.norm(forward)
+    right = np.cross(forward, np.array(cam.up, dtype=np.float64))
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    ph = 2 * math.tan(math.radians(cam.fov_y) / 2)
+    pw = ph * cam.width / cam.height
+    i, j = np.meshgrid(np.arange(cam.width) + 0.5, np.arange(cam.height) + 0.5)
+    x, y = i / cam.width - 0.5, 0.5 - j / cam.height
+    d = forward + (x * pw)[..., None] * right + (y * ph)[..., None] * up
+    d /= np.linalg.norm(d, axis=-1, keepdims=True)
+    p = eye + depth[..., None] * d
+    n = refs["aov_normal"].astype(np.float64)
+    n = np.where(np.sum(n * d, axis=-1, keepdims=True) > 0, -n, n)  # facing the ray
+    lit = np.zeros(ids.shape, dtype=bool)
+    for k, obj in enumerate(scene.objects):
+        m = scene.materials[obj.material]
+        if m.diffuse != 0 or m.specular != 0:
+            lit |= ids == k
+    shadow, slack = 0, 0
+    for light in scene.lights:
+        if isinstance(light, PointLight):
+            to = np.array(light.position) - p
+            to /= np.linalg.norm(to, axis=-1, keepdims=True)
+        else:
+            to = np.broadcast_to(-np.array(light.direction), p.shape)
+        nl = np.sum(n * to, axis=-1)
+        shadow += int(np.sum(lit & hit & (nl > 0)))
+        slack += int(np.sum(lit & hit & (np.abs(nl) < 1e-6)))
+    counts["shadow"] = shadow
+    return counts, slack
+
+
+def compare_rays(scene: Any, refs: dict[str, np.ndarray], rays: dict[str, int]) -> tuple[bool, str]:
+    want, slack = expected_rays(scene, refs)
+    wrong = []
+    for key, value in want.items():
+        got = int(rays.get(key, 0))
+        allowed = slack if key == "shadow" else 0
+        if abs(got - value) > allowed:
+            what = "one per pixel" if key == "primary" else "one per light in front of each hit"
+            wrong.append(f"{key}: expected {value} ({what}), got {got}")
+    if wrong:
+        return False, "ray counts: **differ**: " + "; ".join(wrong)
+    return True, "ray counts: " + ", ".join(f"{k} {rays.get(k, 0)}" for k in want) + " as expected"
+
+
+def compare_analytic(value: Analytic, rendered: Rendered) -> tuple[bool, str]:
+    assert rendered.image is not None and rendered.aov is not None
+    if value.what == "color":
+        got = rendered.image[value.y, value.x, :3]
+    elif value.what == "depth":
+        got = rendered.aov[value.y, value.x, :1]
+    else:
+        got = rendered.aov[value.y, value.x, 2:5]
+    err = np.abs(np.asarray(got, np.float64) - np.asarray(value.expected))
+    ok = bool(np.all(err <= value.tolerance))  # NaN fails
+    text = (
+        f"pixel ({value.x}, {value.y}) {value.what}: expected {_rgb(np.array(value.expected))} "
+        f"(closed form: {value.why}), got {_rgb(got)}"
+    )
+    return ok, ("analytic: " if ok else "analytic: **differs**: ") + text
+
+
+def judge(check: SceneCheck, rendered: Rendered, refs: dict[str, np.ndarray]) -> Verdict:
+    """Every comparison of one scene: the references' images, the analytic values, the aov
+    and the ray counts."""
+    from reference.metrics import FLOAT32_SLACK, MITSUBA_TOLERANCE
+
+    assert rendered.image is not None and rendered.aov is not None
+    scene = check.load()
+    share = share_bound(scene.camera.width)
+    lines, heat, ok = [], {}, True
+    ours = rendered.image
+    for name in check.references:
+        if name == "povray":
+            good, text = compare_image(
+                "POV-Ray", refs["povray"], ours, refs["povray_bound"] + FLOAT32_SLACK, share
+            )
+        else:
+            good, text = compare_image("Mitsuba", refs["mitsuba"], ours, MITSUBA_TOLERANCE, share)
+        if not good:
+            heat[name] = (refs[name], ours)
+        ok &= good
+        lines.append(text)
+    for value in check.analytic:
+        good, text = compare_analytic(value, rendered)
+        ok &= good
+        lines.append(text)
+    if check.aov:
+        good, text = compare_aov(refs, rendered.aov, share)
+        ok &= good
+        lines.append(text)
+    if check.rays:
+        good, text = compare_rays(scene, refs, rendered.rays)
+        ok &= good
+        lines.append(text)
+    return Verdict(ok, lines, heat)
+
+
+def heat_map_path(directory: Path, check: SceneCheck, name: str) -> Path:
+    return directory / f"{check.lesson}-{check.name}-{name}.png"
