@@ -640,9 +640,10 @@ def integration_test(submitted: dict[str, Path], artifacts: Path | None) -> Test
     """The final check: every region the submission holds and has written (of every lesson),
     the student's, together on the Ex 25 scene, against POV-Ray and Mitsuba. It is worth no
     points: a mistake it shows is charged once, by its own lesson's checks; it shows whether
-    the student's whole tracer makes the lecture's picture. None when no region was written."""
+    the student's whole tracer makes the lecture's picture. None when no region was written
+    (a stub tree: the course's solution alone would pass, and say nothing of the student)."""
     spliced = splice(submitted, None)
-    if not spliced.files:
+    if not spliced.files or not spliced.taken:
         return None
     with temporary_work() as tmp:
         work = Path(tmp)
@@ -652,7 +653,7 @@ def integration_test(submitted: dict[str, Path], artifacts: Path | None) -> Test
         else:
             rendered = render_student(build, [INTEGRATION_SCENE], work / "renders")[0]
         test = _scene_test(INTEGRATION_SCENE, 0.0, rendered, artifacts)
-    yours = ", ".join(sorted(spliced.taken)) or "none"
+    yours = ", ".join(sorted(spliced.taken))
     test.output += (
         f"\n\nYour code of {yours} together, the course's solution elsewhere. (Worth no "
         "points: each mistake it shows is charged once, by its lesson's checks.)"
