@@ -636,14 +636,19 @@ INTEGRATION_SCENE = SceneCheck(
 )
 
 
-def integration_test(submitted: dict[str, Path], artifacts: Path | None) -> TestResult | None:
+def integration_test(
+    submitted: dict[str, Path], artifacts: Path | None, graded: Sequence[str] = ()
+) -> TestResult | None:
     """The final check: every region the submission holds and has written (of every lesson),
     the student's, together on the Ex 25 scene, against POV-Ray and Mitsuba. It is worth no
     points: a mistake it shows is charged once, by its own lesson's checks; it shows whether
-    the student's whole tracer makes the lecture's picture. None when no region was written
-    (a stub tree: the course's solution alone would pass, and say nothing of the student)."""
+    the student's whole tracer makes the lecture's picture. None when no region was written,
+    or none of the `graded` lessons' (a stub tree: the course's code alone would pass, and say
+    nothing of the student's)."""
     spliced = splice(submitted, None)
     if not spliced.files or not spliced.taken:
+        return None
+    if graded and not spliced.taken & set(graded):
         return None
     with temporary_work() as tmp:
         work = Path(tmp)
@@ -771,7 +776,7 @@ def grade(
         diagnoses.append(diagnosis)
     if integration and scenes:
         try:
-            test = integration_test(submitted, out)
+            test = integration_test(submitted, out, result.lessons)
         except Exception as error:  # the grader's own fault: said, never a crash
             result.notes.append(f"The integration check could not run: {error!r}")
             test = None
