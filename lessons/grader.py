@@ -48,7 +48,7 @@ from lessons.scene_checks import (
     references,
     render_student,
 )
-from lessons.student import CORE, STUB_HEADER, _submitted_files, _with_include, stub_lines
+from lessons.student import CORE, STUB_HEADER, _submitted_files, _with_include, is_given, stub_lines
 from reference.metrics import heat_map
 
 HERE = Path(__file__).resolve().parent
@@ -240,7 +240,9 @@ def splice(submitted: dict[str, Path], lesson: str | None) -> Splice:
             body_start = region.end - 1 - len(region.body)
             body = list(own[region.key].body) if region.key in own else []
             is_stub = any("not_implemented(" in b for b in body)
-            if lesson is None and (region.key not in own or is_stub):
+            if lesson is None and (
+                region.key not in own or is_stub or is_given(own[region.key], region)
+            ):
                 continue  # the integration keeps the solution where the student wrote nothing
             if region.key in own:
                 stubbed = stubbed or is_stub
@@ -689,7 +691,9 @@ def touched_lessons(submitted: dict[str, Path]) -> list[str]:
             if r.is_copy or r.key not in solution:
                 continue
             present.add(r.lesson)
-            if solution_lines(r) != solution_lines(solution[r.key]):
+            if solution_lines(r) != solution_lines(solution[r.key]) and not is_given(
+                r, solution[r.key]
+            ):
                 if any("not_implemented(" in b for b in r.body):
                     stubbed.add(r.lesson)
                 else:

@@ -16,6 +16,10 @@ Syntax (one region is the whole body of one function, so that a stub can replace
   unused) is read from the signature above.
 - ``// PROMPT: text`` lines, right after BEGIN and optional, are the prompt a student tree
   shows in place of the solution (several lines join into one paragraph).
+- ``// GIVEN: code`` lines, right after the prompt and optional, are what a tree of an
+  earlier lesson holds in the region instead of a stub: a plain version that works, which this
+  lesson refines (lesson L13 makes the roots and the ray's offset robust; until then every tree
+  has the textbook quadratic and a fixed epsilon, so that its spheres render).
 - ``// END SOLUTION`` closes the region; the next line must close the function (``}``).
 - Regions do not nest. A lesson whose code is spread over several functions has several
   regions.
@@ -35,6 +39,7 @@ from pathlib import Path
 BEGIN = re.compile(r"^(?P<indent>\s*)//\s*BEGIN SOLUTION\b\s*(?P<lesson>\S*)\s*(?P<rest>.*)$")
 END = re.compile(r"^\s*//\s*END SOLUTION\b\s*(?P<rest>.*)$")
 PROMPT = re.compile(r"^\s*//\s*PROMPT:\s?(?P<text>.*)$")
+GIVEN = re.compile(r"^\s*//\s*GIVEN:\s?(?P<code>.*)$")
 # Any line that mentions a marker word: a misspelt marker must not pass as a comment.
 # (a comment line that starts with BEGIN or END, or with a word before SOLUTION, or that says
 # begin/end solution in any case)
@@ -63,7 +68,8 @@ class Region:
     end: int
     indent: str
     prompt: str  # the PROMPT lines joined, "" when none
-    body: tuple[str, ...]  # the solution's lines (between the prompt and END)
+    body: tuple[str, ...]  # the solution's lines (between the prompt or the given code and END)
+    given: tuple[str, ...] = ()  # the GIVEN code, as lines of the body (indented), or ()
 
     @property
     def is_copy(self) -> bool:
@@ -176,6 +182,18 @@ def parse(text: str, file: str, known_lessons: set[str] | None = None) -> list[R
             while j < i and (p := PROMPT.match(lines[j])):
                 prompt.append(p.group("text").strip())
                 j += 1
+            given = []
+            while j < i and (g := GIVEN.match(lines[j])):
+                given.append(indent + g.group("code"))
+                j += 1
+            stray = next(
+                (k for k in range(j, i) if GIVEN.match(lines[k]) or PROMPT.match(lines[k])), None
+            )
+            if stray is not None:
+                raise MarkerError(
+                    f"{file}:{stray + 1}: a PROMPT or GIVEN line inside the solution (they come "
+                    "right after BEGIN SOLUTION: the prompt, then the given code)"
+                )
             try:
                 function, parameters = parse_signature(_signature(lines, open_at - 1))
             except ValueError as error:
@@ -191,9 +209,12 @@ def parse(text: str, file: str, known_lessons: set[str] | None = None) -> list[R
                     indent=indent,
                     prompt=" ".join(prompt),
                     body=tuple(lines[j:i]),
+                    given=tuple(given),
                 )
             )
             open_at = None
+        elif open_at is None and GIVEN.match(line):
+            raise MarkerError(f"{where}: a GIVEN line outside a solution region")
         elif MENTION.search(line):
             raise MarkerError(
                 f"{where}: malformed marker {line.strip()!r} (expected '// BEGIN SOLUTION Lnn' "

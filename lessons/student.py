@@ -44,6 +44,7 @@ class TreeReport:
     stubbed: list[Region] = field(default_factory=list)
     kept: list[Region] = field(default_factory=list)  # the solution, earlier lessons
     carried: list[Region] = field(default_factory=list)  # the student's own, from --from
+    given: list[Region] = field(default_factory=list)  # later lessons' plain versions (GIVEN)
 
 
 def stub_lines(region: Region) -> list[str]:
@@ -54,6 +55,26 @@ def stub_lines(region: Region) -> list[str]:
     lines.append(f'{region.indent}not_implemented("{region.lesson}", "{region.function}"{args});')
     lines.append(f"{region.indent}// END SOLUTION")
     return lines
+
+
+def given_lines(region: Region) -> list[str]:
+    """What replaces a region of a later lesson that refines a plain version (GIVEN lines) in
+    a tree of an earlier lesson: the prompt and the given code, which works until that lesson
+    refines it."""
+    lines = [f"{region.indent}// BEGIN SOLUTION {region.lesson}"]
+    lines += [f"{region.indent}// PROMPT: {line}" for line in _wrap(region.prompt, region.indent)]
+    lines += list(region.given)
+    lines.append(f"{region.indent}// END SOLUTION")
+    return lines
+
+
+def is_given(own: Region, solution: Region) -> bool:
+    """Whether a tree's region holds the course's given code (GIVEN lines) of `solution`'s
+    region, not the student's."""
+    if not solution.given:
+        return False
+    given = Region(**{**own.__dict__, "body": solution.given})
+    return solution_lines(own) == solution_lines(given)
 
 
 def _wrap(text: str, indent: str) -> list[str]:
@@ -99,7 +120,10 @@ def lesson_file_text(
     # From the last region to the first, so earlier line numbers stay valid.
     for region in reversed(regions):
         body_start = region.begin  # index of the first line after BEGIN (0-based)
-        if region.lesson in hide:
+        if region.lesson in hide and region.lesson != lesson and region.given:
+            lines[region.begin - 1 : region.end] = given_lines(region)
+            report.given.append(region)
+        elif region.lesson in hide:
             lines[region.begin - 1 : region.end] = stub_lines(region)
             report.stubbed.append(region)
             stubbed = True

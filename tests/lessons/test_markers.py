@@ -77,6 +77,15 @@ def test_a_good_region_parses():
     assert r.body == ("    return 2 * x;",) and (r.begin, r.end) == (2, 5)
 
 
+def test_given_code_parses_after_the_prompt():
+    text = GOOD.replace(
+        "    return 2 * x;\n", "    // GIVEN: return x + x; // plain\n    return 2 * x;\n"
+    )
+    (r,) = parse(text, "a.h", set(LESSON_IDS))
+    assert r.given == ("    return x + x; // plain",) and r.body == ("    return 2 * x;",)
+    assert r.prompt == "twice x"
+
+
 BAD = {
     "unclosed": (GOOD.replace("    // END SOLUTION\n", ""), "a.h:2", "never closed"),
     "end without begin": (
@@ -97,6 +106,16 @@ BAD = {
         GOOD.replace("{\n    // BEGIN", "\n    // BEGIN"),
         "a.h:2",
         "first line of a function body",
+    ),
+    "given inside the solution": (
+        GOOD.replace("    return 2 * x;\n", "    return 2 * x;\n    // GIVEN: return x + x;\n"),
+        "a.h:5",
+        "inside the solution",
+    ),
+    "given outside a region": (
+        "// GIVEN: return 0;\n" + GOOD,
+        "a.h:1",
+        "outside a solution region",
     ),
     "code after end": (
         GOOD.replace("    // END SOLUTION\n", "    // END SOLUTION\n    x = 0;\n"),

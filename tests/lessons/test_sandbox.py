@@ -136,8 +136,9 @@ def test_an_extension_built_from_a_tree_renders_or_says_not_implemented(tmp_path
     (trace() of L07 comes first): exit status 86 and the function's name, never a signal."""
     scene = ROOT / "reference" / "scenes" / "lambert.toml"
     write_student_tree("L08", tmp_path / "tree08")
-    # Every sphere and every offset ray origin calls L13's robust quadratic and offset, stubs
-    # in every tree before L13: those two files as solved (their L01, L02 parts are the tree's).
+    # Every sphere and every offset ray origin calls L13's robust quadratic and offset, which
+    # trees before L13 hold in their textbook form (GIVEN lines): bit for bit needs them solved
+    # (test_a_tree_before_l13_renders_with_the_textbook_forms renders the tree as written).
     for name in ("02_ray.h", "05_sphere.h"):
         shutil.copyfile(CORE / name, tmp_path / "tree08" / "cpp" / name)
     build = build_extension(tmp_path / "tree08", tmp_path / "w08")
@@ -153,3 +154,38 @@ def test_an_extension_built_from_a_tree_renders_or_says_not_implemented(tmp_path
     assert run.kind == "not_implemented" and run.returncode == 86, (run.message, run.output)
     assert "not implemented: trace (lesson L07)" in run.message
     assert "image sha256" not in run.output
+
+
+def test_a_tree_before_l13_renders_with_the_textbook_forms(tmp_path):
+    """L13 refines code that every sphere and every shadow ray runs (the quadratic's roots, the
+    offset of a new ray's origin): a tree of an earlier lesson holds their textbook forms (the
+    regions' GIVEN lines), never a stub, so that an L08 tree renders the shadows scene. Its
+    image is the project's within a few pixels: on this unit-scale scene the textbook roots
+    differ from the robust ones by a few ulps of t, which moves no pixel's colour by more than
+    rounding, and a fixed epsilon of 1e-4 (against the error bound, ~1e-15 here) can only flip
+    a shadow ray that grazes a blocker's silhouette; each flipped pixel changes the image's sum
+    by at most 3 (three channels in [0, 1]): 3 flips, a sum within 9."""
+    from lessons.markers import find_regions
+    from tracer.render import render_with_stats
+    from tracer.scene import load_scene
+
+    scene = ROOT / "reference" / "scenes" / "shadows.toml"
+    report = write_student_tree("L08", tmp_path / "tree08")
+    refined = {r.function for r in find_regions(CORE) if r.lesson == "L13" and r.given}
+    assert {r.function for r in report.given} == refined == {
+        "offset_ray_origin", "quadratic_roots", "sphere_discriminant"
+    }  # fmt: skip
+    text = (tmp_path / "tree08" / "cpp" / "05_sphere.h").read_text()
+    assert "b * b - a * (dot(f, f) - r2)" in text and "(b * inv_a) * d" not in text
+    # The given code is the course's, not the student's: grading the tree takes L08 alone.
+    from lessons.grader import touched_lessons
+    from lessons.student import _submitted_files
+
+    assert touched_lessons(_submitted_files(tmp_path / "tree08")) == ["L08"]
+    build = build_extension(tmp_path / "tree08", tmp_path / "w08")
+    assert build.outcome.ok, build.outcome.message
+    run = render_in_child(build, scene)
+    assert run.kind == "ok", (run.message, run.output[-2000:])
+    got = float(run.output.rsplit(" sum ", 1)[1].split()[0])
+    want = render_with_stats(load_scene(scene), threads=2, progress=False, packets=False)
+    assert abs(got - float(want.image.sum(dtype="float64"))) <= 9

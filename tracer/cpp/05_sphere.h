@@ -49,6 +49,8 @@ inline double sphere_discriminant(const Vec3 &f, const Vec3 &d, double a, double
     // PROMPT: it keeps its digits for a sphere far away or tiny (|f| >> r), where b^2 and a c0
     // PROMPT: are huge and nearly equal: use the centre's distance to the ray's line (Ray
     // PROMPT: Tracing Gems ch. 7, eq. 7.5).
+    // GIVEN: (void)d, (void)inv_a; // the robust form needs them
+    // GIVEN: return b * b - a * (dot(f, f) - r2); // the textbook form, until lesson L13
     Vec3 l = f - (b * inv_a) * d; // centre -> closest point of the line (Haines eq. 7.5)
     return a * (r2 - dot(l, l));
     // END SOLUTION
@@ -65,6 +67,9 @@ inline SphereRoots quadratic_roots(double b, double c0, double D, double inv_a) 
     // PROMPT: Both roots t0 <= t1 of a t^2 + 2 b t + c0 = 0, given D = b^2 - a c0 >= 0 and
     // PROMPT: inv_a = 1/a, such that neither root is the difference of two nearly equal numbers
     // PROMPT: (the small root of t^2 - 2e8 t + 1 = 0 is 5e-9, not 0). real = true.
+    // GIVEN: (void)c0; // the stable form needs it (Vieta)
+    // GIVEN: double root = std::sqrt(D); // the textbook form, until lesson L13
+    // GIVEN: return {true, (-b - root) * inv_a, (-b + root) * inv_a};
     double q = -(b + std::copysign(std::sqrt(D), b));
     if (q == 0) return {true, 0, 0}; // b = D = 0: the double root t = 0
     double t0 = c0 / q, t1 = q * inv_a;
@@ -78,7 +83,7 @@ inline SphereRoots sphere_roots(const Sphere &s, const Ray &ray) {
     // PROMPT: Solve a t^2 + 2 b t + c0 = 0 for the ray's line, with f = o - c, a = d.d,
     // PROMPT: b = f.d, c0 = f.f - r^2. Return real = false when the line misses; otherwise both
     // PROMPT: roots, t0 <= t1. The textbook formula will do here (lesson L13 returns to it:
-    // PROMPT: sphere_discriminant() and quadratic_roots() are its stubs until then).
+    // PROMPT: until then sphere_discriminant() and quadratic_roots() hold the textbook one).
     Vec3 f = ray.o - s.center;
     double a = dot(ray.d, ray.d);
     double b = dot(f, ray.d);
