@@ -54,7 +54,12 @@ def test_a_tree_holds_no_solution_of_its_lesson_or_later(lesson, tmp_path):
     leaked = {k: [x for x in v if x in lines] for k, v in expected.items()}
     assert not any(leaked.values()), f"{lesson} tree leaks solution lines: {leaked}"
     stubbed = {(r.file, r.function) for r in report.stubbed}
-    assert stubbed == set(expected)
+    # A later lesson's region with GIVEN lines holds that plain code (L13's textbook forms in
+    # every tree before L13), its lesson's own tree a stub.
+    given = {(r.file, r.function) for r in report.given}
+    assert all(r.given and r.lesson != lesson for r in report.given)
+    assert stubbed | given == set(expected) and not stubbed & given
+    assert bool(given) == (lesson != "L13")
     for file, function in stubbed:
         assert f'"{function}"' in (out / "cpp" / file).read_text()
     # Earlier lessons keep the solution, every line of it.
