@@ -38,6 +38,7 @@ SCENE_MISTAKES = {
     ("L03", "sign_of_a_minus_o"),
     ("L04", "normal_not_turned"),
     ("L06", "phong_unclamped"),
+    ("L12", "roulette_without_reweighting"),  # the furnace's closed form and Mitsuba's
 }
 
 
@@ -58,8 +59,12 @@ def test_the_solution_scores_full_marks(tmp_path: Path, lesson: str) -> None:
     # The scenes ran, against both references, and the integration check closed the grade.
     scenes = [t for t in result.tests if t.kind == "scene" and t.lesson == lesson]
     assert len(scenes) == len(lesson_scenes(lesson))
-    assert all("against POV-Ray: agrees" in t.output for t in scenes)
-    assert all("against Mitsuba: agrees" in t.output for t in scenes)
+    # A path-traced scene (L12) has Mitsuba's path tracer as its one reference, in the
+    # statistical sense; the others both renderers', pixel by pixel.
+    classic = [t for t, c in zip(scenes, lesson_scenes(lesson), strict=True)
+               if "povray" in c.references]  # fmt: skip
+    assert all("against POV-Ray: agrees" in t.output for t in classic)
+    assert all("against Mitsuba" in t.output and "agrees" in t.output for t in scenes)
     assert result.tests[-1].lesson == INTEGRATION and result.tests[-1].status == "passed"
     assert not list(tmp_path.glob("*.png"))  # no heat map for a scene that agrees
 
