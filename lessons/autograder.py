@@ -33,8 +33,9 @@ SOURCES = ("tracer", "lessons", "reference", "converters")
 SKIP = ("__pycache__", ".so", ".pyc", ".o")
 REQUIREMENTS = """\
 # The grader's run time on Gradescope (POV-Ray and Mitsuba are not needed: the references are
-# pre-rendered in references/).
+# pre-rendered in references/; scipy for the path-traced scenes' statistical tests).
 numpy>=1.24
+scipy>=1.10
 nanobind>=2.0
 openexr>=3.2
 pillow>=10

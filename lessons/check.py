@@ -54,9 +54,11 @@ def check_lesson(
     lesson: str, *, scenes: bool = True, known_wrong: Iterable[Mistake] | None = None
 ) -> LessonCheck:
     """Every check of one lesson; `scenes` False grades the known-wrong versions on their
-    probes only (quicker; the solution and the stub tree always run the scenes too);
+    probes only (quicker; the solution and the stub tree always run the scenes too), and so
+    does a mistake whose concept has no scene in the lesson;
     `known_wrong` replaces the lesson's mistakes (tests feed one that must not be caught)."""
     from lessons.grader import grade
+    from lessons.scene_checks import lesson_scenes
 
     start = time.monotonic()
     report = LessonCheck(lesson)
@@ -92,6 +94,10 @@ def check_lesson(
             failed = [t.name for t in result.tests if t.status == "failed"]
             report.failures.append(f"solution: fails {', '.join(failed)}")
         wrong = list(mistakes(lesson) if known_wrong is None else known_wrong)
+        # A mistake whose concept has no scene is graded on its probes only: a scene of another
+        # concept cannot be the check that must name it, and the extension's build (about 5 s
+        # of CPU) and the renders are saved.
+        with_scenes = {c.concept for c in lesson_scenes(lesson)} if scenes else set()
         report.mistakes = len(wrong)
         for k, mistake in enumerate(wrong):
             sub = work / f"mistake{k}"
@@ -100,7 +106,9 @@ def check_lesson(
             except MistakeError as error:
                 report.failures.append(f"mistake {mistake.name}: {error}")
                 continue
-            result = grade(sub, lesson=lesson, scenes=scenes, integration=False)
+            result = grade(
+                sub, lesson=lesson, scenes=mistake.concept in with_scenes, integration=False
+            )
             first = result.diagnosis.split("\n", 1)[0]
             if first.startswith(f"{lesson}: wrong: {mistake.concept} ("):
                 report.caught += 1

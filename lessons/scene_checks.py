@@ -177,6 +177,8 @@ def render_references(check: SceneCheck) -> dict[str, np.ndarray]:
     from reference.mitsuba import run_mitsuba
     from reference.povray import run_povray
 
+    if isinstance(check, PathSceneCheck):
+        return render_path_references(check)
     scene = check.load()
     pov = run_povray(scene, threads=2)
     out: dict[str, np.ndarray] = {"povray": pov.image, "povray_bound": pov.error_bound}
@@ -232,6 +234,13 @@ for k in range(int(sys.argv[4]), len(jobs)):
     scene = load_scene(job["scene"])
     if job["size"]:
         scene = scene.with_overrides(width=job["size"][0], height=job["size"][1])
+    if job.get("seeds"):  # a path-traced scene: independent renders, one per seed
+        runs = [render_with_stats(scene.with_overrides(seed=s), threads=2, progress=False,
+                                  packets=False) for s in job["seeds"]]
+        np.savez(job["out"], image=np.stack([r.image for r in runs]), aov=np.zeros(0),
+                 rays=np.array(json.dumps(runs[0].rays)))
+        print(token, "done", k, flush=True)
+        continue
     result = render_with_stats(scene, threads=2, progress=False, packets=False)
     aov = render_with_stats(scene.with_overrides(integrator="aov"), threads=2, progress=False)
     np.savez(job["out"], image=result.image, aov=aov.image,
@@ -255,7 +264,12 @@ def render_student(build: Build, checks: list[SceneCheck], work: Path) -> list[R
     assert build.binary is not None
     work.mkdir(parents=True, exist_ok=True)
     jobs = [
-        {"scene": str(c.scene_path), "size": c.size, "out": str(work / f"scene{k}.npz")}
+        {
+            "scene": str(c.scene_path),
+            "size": c.size,
+            "out": str(work / f"scene{k}.npz"),
+            "seeds": path_seeds(c),
+        }
         for k, c in enumerate(checks)
     ]
     job_file = work / "scenes.json"
@@ -468,6 +482,8 @@ def judge(check: SceneCheck, rendered: Rendered, refs: dict[str, np.ndarray]) ->
     and the ray counts."""
     from reference.metrics import FLOAT32_SLACK, MITSUBA_TOLERANCE
 
+    if isinstance(check, PathSceneCheck):
+        return judge_path(check, rendered, refs)
     assert rendered.image is not None and rendered.aov is not None
     scene = check.load()
     share = share_bound(scene.camera.width)
@@ -501,3 +517,164 @@ def judge(check: SceneCheck, rendered: Rendered, refs: dict[str, np.ndarray]) ->
 
 def heat_map_path(directory: Path, check: SceneCheck, name: str) -> Path:
     return directory / f"{check.lesson}-{check.name}-{name}.png"
+
+
+# --- path-traced scenes: a statistical comparison with Mitsuba's path tracer --------------
+#
+# A path-traced image is a Monte Carlo estimate: it cannot agree with Mitsuba's pixel by pixel
+# under a fixed tolerance. The reference suite's argument (reference/stats.py,
+# tests/reference/test_path_stats.py) carries over: Mitsuba's own path tracer at high spp gives
+# each pixel's expected value and the variance of one sample; the student's tracer renders
+# `replicates` independent images (other seeds) of `spp` samples; Mitsuba's per-pixel z-test
+# (on their mean) catches a broken image, and the aggregate t-test over the replicates (the
+# whole image's mean and blocks of pixels) catches a bias of a few percent that no one pixel's
+# noise would show. POV-Ray has no path tracer of this estimator: it does not apply.
+
+
+@dataclass(frozen=True)
+class PathSceneCheck(SceneCheck):
+    """A path-traced scene compared with Mitsuba's path tracer in the statistical sense.
+
+    ``closed_form``: where every pixel's expected value is known exactly (a furnace), that
+    value and why; the replicates are then also tested against it, with no reference noise."""
+
+    references: tuple[str, ...] = ("mitsuba",)
+    aov: bool = False  # a path scene's primary hits are the classic lessons' (L01-L03)
+    rays: bool = False  # its ray counts are random (Russian roulette)
+    replicates: int = 6  # as tests/reference/test_path_stats.py: t with 5 degrees of freedom
+    reference_spp: int = 4096  # Mitsuba's, as the reference suite's (16 chunks of 256)
+    # A correct submission whose code differs from the solution's (another sampling map, other
+    # roundings) is a fresh random draw: it fails a scene with probability alpha. At the
+    # suite's 1% a correct student would fail one of a lesson's four path scenes 4% of the
+    # time; at 1e-3, 0.4%, while the known-wrong versions' biases (5% and more of the image's
+    # mean, tens of its standard errors) are still caught (tests/lessons/test_grader.py).
+    alpha: float = 1e-3
+    block: int = 8  # pixels per block side: about 16 blocks in a 40 x 30 image, as the suite's
+    closed_form: tuple[tuple[float, float, float], str] | None = None
+
+    @property
+    def seeds(self) -> list[int]:
+        seed = self.load().render.seed
+        return [seed + 1009 * k for k in range(self.replicates)]  # far apart: independent
+
+
+def path_seeds(check: SceneCheck) -> list[int] | None:
+    """The seeds of a path scene's independent renders (None for a classic scene)."""
+    return check.seeds if isinstance(check, PathSceneCheck) else None
+
+
+def render_path_references(check: PathSceneCheck) -> dict[str, np.ndarray]:
+    """Mitsuba's path tracer at reference_spp: each pixel's mean and one sample's variance
+    (reference.stats.mitsuba_reference, CHUNKS independent renders)."""
+    from reference.stats import mitsuba_reference
+
+    ref = mitsuba_reference(check.load(), check.reference_spp)
+    return {
+        "path_mean": ref.mean,
+        "path_variance": ref.variance,
+        "path_spp": np.array(ref.spp),
+    }
+
+
+def _failing_blocks(
+    images: list[np.ndarray], mean: np.ndarray, ref_var: np.ndarray, block: int, alpha: float
+) -> np.ndarray:
+    """A pixel mask of the blocks whose mean differs from the reference's (the aggregate test's
+    block t statistics, Sidak-corrected over the blocks, at alpha / 2)."""
+    from scipy import stats
+
+    h, w = mean.shape[:2]
+    hb, wb = h // block, w // block
+    diffs = np.stack([np.asarray(im, np.float64) - mean for im in images])  # (k, h, w, 3)
+    k = len(images)
+    cut = diffs[:, : hb * block, : wb * block]
+    means = cut.reshape(k, hb, block, wb, block, 3).mean(axis=(2, 4))  # (k, hb, wb, 3)
+    rv = ref_var[: hb * block, : wb * block].reshape(hb, block, wb, block, 3).mean(axis=(1, 3))
+    se = np.sqrt(means.var(axis=0, ddof=1) / k + rv / block**2)
+    t = means.mean(axis=0) / np.maximum(se, 1e-300)
+    p = 2 * stats.t.sf(np.abs(t), df=k - 1)
+    p_sidak = 1 - (1 - p) ** p.size
+    bad = (p_sidak < alpha / 2).any(axis=-1)  # (hb, wb)
+    mask = np.zeros((h, w), dtype=bool)
+    for by, bx in np.argwhere(bad):
+        mask[by * block : (by + 1) * block, bx * block : (bx + 1) * block] = True
+    return mask
+
+
+def _statistical(
+    name: str,
+    check: PathSceneCheck,
+    images: list[np.ndarray],
+    spp: int,
+    mean: np.ndarray,
+    variance: np.ndarray,
+    ref_spp: int,
+) -> tuple[bool, str]:
+    """The aggregate test (and, against a noisy reference, the per-pixel z-test of the
+    replicates' mean) of one path scene, and where it fails."""
+    from reference.stats import Reference, aggregate_test, pixel_test
+
+    ref = Reference(mean, variance, ref_spp)
+    agg = aggregate_test(images, ref, alpha=check.alpha, block=check.block)
+    ours = np.mean(images, axis=0)
+    bias = float(agg.detail["relative_bias"])
+    text = (
+        f"mean {100 * bias:+.2g}% off (p = {agg.detail['p_whole']:.2g} for the whole image, "
+        f"{agg.detail['p_block']:.2g} for the worst of {agg.detail['blocks']} blocks; "
+        f"fails below {check.alpha / 2:g})"
+    )
+    ok = agg.passed
+    if np.any(variance > 0):  # a noisy reference (Mitsuba's), not a closed form
+        # One sample's variance from both estimates, the larger: 16 chunks underestimate it
+        # where a few rare, bright samples carry the mean (a glossy floor's reflection of a
+        # small light), and 5 pixels of glossy_mis then had z > 5 on the solution's renders.
+        ours_var = np.var(images, axis=0, ddof=1) * spp
+        both = Reference(mean, np.maximum(variance, ours_var), ref_spp)
+        pix = pixel_test(ours, spp * len(images), both, alpha=check.alpha)
+        text += f"; {100 * pix.statistic:.4g}% of the pixels pass the z-test (at least 99.75%)"
+        ok &= pix.passed
+    if ok:
+        return True, f"against {name}: agrees in the statistical sense ({text})"
+    mask = _failing_blocks(images, mean, variance / ref_spp, check.block, check.alpha)
+    if not mask.any():  # a bias spread over the whole image: every block a little
+        mask = np.ones(mean.shape[:2], dtype=bool)
+    diff = np.abs(ours - mean).max(-1)
+    diff = np.where(mask, np.where(np.isfinite(diff), diff, np.inf), -1)
+    y, x = np.unravel_index(int(np.argmax(diff)), diff.shape)
+    return False, (
+        f"against {name}: **differs**: {text}; failing pixels in {_where(mask)}; "
+        f"worst pixel ({x}, {y}): expected {_rgb(mean[y, x])}, got {_rgb(ours[y, x])} "
+        f"(the mean of {len(images)} renders of {spp} samples)"
+    )
+
+
+def judge_path(check: PathSceneCheck, rendered: Rendered, refs: dict[str, np.ndarray]) -> Verdict:
+    """A path scene: the student's independent renders against Mitsuba's path tracer, and
+    against the closed form where there is one."""
+    assert rendered.image is not None
+    images = [np.asarray(im, np.float64)[..., :3] for im in rendered.image]
+    spp = check.load().render.spp
+    ours = np.mean(images, axis=0).astype(np.float32)
+    lines, heat, ok = [], {}, True
+    if "mitsuba" in check.references:
+        mean = refs["path_mean"]
+        good, text = _statistical(
+            "Mitsuba's path tracer", check, images, spp, mean, refs["path_variance"],
+            int(refs["path_spp"]),
+        )  # fmt: skip
+        if not good:
+            heat["mitsuba"] = (mean.astype(np.float32), ours)
+        ok &= good
+        lines.append(text)
+    if check.closed_form is not None:
+        value, why = check.closed_form
+        exact = np.broadcast_to(np.asarray(value, np.float64), images[0].shape)
+        good, text = _statistical(
+            "the closed form", check, images, spp, exact, np.zeros_like(exact), 1
+        )  # no reference noise: variance 0
+        text = text.replace("against the closed form", f"against the closed form ({why})")
+        if not good and "mitsuba" not in heat:
+            heat["closed_form"] = (exact.astype(np.float32), ours)
+        ok &= good
+        lines.append(text)
+    return Verdict(ok, lines, heat)

@@ -12,6 +12,9 @@ import sys
 import zipfile
 from pathlib import Path
 
+import numpy as np
+import pytest
+
 from lessons.check import check_lesson, format_table
 from lessons.grader import INTEGRATION
 from lessons.mistakes import Mistake, mistakes, write_mistake
@@ -121,3 +124,45 @@ def test_the_autograder_zip_grades_in_gradescopes_layout(tmp_path: Path) -> None
     assert any(t["name"].startswith("scene inside_lit") for t in failed)
     assert 0 < data["score"] < sum(t["max_score"] for t in data["tests"])
     assert str(ROOT) not in json.dumps(data)  # nothing of this checkout leaks into it
+
+
+@pytest.mark.parametrize(
+    ("lesson", "wrong"), [("L12", "roulette_without_reweighting"), ("L13", "textbook_discriminant")]
+)
+def test_the_autograder_carries_the_references_of_path_traced_and_stiff_scenes(
+    tmp_path: Path, lesson: str, wrong: str
+) -> None:
+    """Every scene's references go into the zip, a path-traced scene's (Mitsuba's mean and
+    variance) too: unpacked, with no renderer allowed (RTLAB_REFERENCES_ONLY), it grades the
+    solution full and names a known-wrong version's concept from a failing scene."""
+    from lessons.autograder import build_zip
+    from lessons.scene_checks import PathSceneCheck, lesson_scenes
+
+    out = tmp_path / "autograder.zip"
+    names = build_zip(lesson, out)
+    scenes = lesson_scenes(lesson)
+    with zipfile.ZipFile(out) as archive:
+        for check in scenes:
+            (arc,) = [n for n in names if n.startswith(f"references/{lesson}/{check.name}-")]
+            with archive.open(arc) as f, np.load(f) as data:
+                want = "path_mean" if isinstance(check, PathSceneCheck) else "povray"
+                assert want in data.files, (arc, data.files)
+        archive.extractall(tmp_path / "autograder" / "source")
+    root = tmp_path / "autograder"
+    source = root / "source"
+    shutil.copyfile(source / "run_autograder", root / "run_autograder")
+    env = {**os.environ, "RTLAB_AUTOGRADER_ROOT": str(root)}
+    done = subprocess.run([sys.executable, "lessons/autograder.py", "setup"], cwd=source,
+                          env=env, capture_output=True, text=True, timeout=600)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    solution = tmp_path / "solution"
+    shutil.copytree(CORE, solution)
+    data = _run_autograder(root, solution)
+    assert all(t["status"] == "passed" for t in data["tests"]), data["output"]
+    assert sum(t["name"].startswith("scene ") for t in data["tests"]) == len(scenes) + 1
+    mistake = next(m for m in mistakes(lesson) if m.name == wrong)
+    write_mistake(mistake, tmp_path / "wrong")
+    data = _run_autograder(root, tmp_path / "wrong")
+    assert data["output"].startswith(f"{lesson}: wrong: {mistake.concept} (")
+    failed = [t for t in data["tests"] if t["status"] == "failed"]
+    assert any(t["name"].startswith("scene ") and mistake.concept in t["tags"] for t in failed)
