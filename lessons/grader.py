@@ -427,8 +427,12 @@ def diagnose(lesson: str, tests: list[TestResult], depends: dict[str, tuple[str,
         if of:
             fraction[concept] = sum(t.status == "failed" for t in of) / len(of)
     broken = [c for c in info.concepts if fraction.get(c, 0) > 0]
-    # A concept whose probes call code of another broken concept may fail because of it.
-    root = [c for c in broken if not any(d in broken for d in depends.get(c, ()))] or broken
+    # A concept whose probes call code of another broken concept may fail because of it. Only
+    # a failing probe shows that the other concept's own code is broken: a scene runs every
+    # concept of the lesson at once, so its failure under one concept may come from another
+    # (shadow acne, where the ray starts, darkens a scene of objects blocking light).
+    probed = {c for c in broken if any(t.concept == c and t.kind != "scene" for t in written)}
+    root = [c for c in broken if not any(d in probed for d in depends.get(c, ()))] or broken
     concept = max(root, key=lambda c: (fraction[c], -info.concepts.index(c)))
     of = [t for t in written if t.concept == concept]
     first = of[0]
