@@ -291,7 +291,9 @@ def show_mistake(mistake: Mistake, scenes: list[ScenePage]) -> MistakeShown:
     if "povray" in page.runs:
         pov, tol = page.runs["povray"], page.tolerances["povray"]
         ok, text = compare_image("POV-Ray", pov.image, image, tol, share_bound(page.width))
-        shown.caught = ("passes: " if ok else "fails: ") + text.replace("**", "")
+        # compare_image's line without its "against POV-Ray: " and Markdown emphasis.
+        said = text.replace("**", "").split(": ", 1)[1].removeprefix("differs: ")
+        shown.caught = ("passes: " if ok else "fails: ") + said
     return shown
 
 
