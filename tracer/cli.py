@@ -269,7 +269,23 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("lesson", help="the course's lessons: list, show, student trees")
     _add_lesson_arguments(p)
     p.set_defaults(func=cmd_lesson)
+
+    p = sub.add_parser("report", help="the course's pages: a lesson's, or every lesson's")
+    _add_report_arguments(p)
+    p.set_defaults(func=cmd_report)
     return parser
+
+
+def _add_report_arguments(parser: argparse.ArgumentParser) -> None:
+    from reports.cli import add_arguments
+
+    add_arguments(parser)
+
+
+def cmd_report(args: argparse.Namespace) -> int:
+    from reports.cli import run
+
+    return run(args)
 
 
 def _add_lesson_arguments(parser: argparse.ArgumentParser) -> None:

@@ -1,0 +1,249 @@
+"""Writing the pages: Jinja2 templates (reports/templates/), the lessons' Markdown through
+markdown-it-py, images as PNG files beside the page (or, ``single_file``, inlined as data:
+URIs), and every site written atomically: built in a temporary directory beside the target and
+renamed into place, so a failed run leaves the old site as it was.
+
+The pages request nothing from any other host (no CDN, no web font, no script): formulas are
+plain text and Unicode as the lessons write them, and the pages read the same without
+JavaScript.
+"""
+
+from __future__ import annotations
+
+import base64
+import contextlib
+import json
+import math
+import os
+import re
+import shutil
+import tempfile
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from reports.lesson import NAMES, LessonPage
+
+TEMPLATES = Path(__file__).resolve().parent / "templates"
+# The scenes are small (81 x 61 pixels): shown three times larger, each pixel a square.
+SCALE = 3
+
+
+# An asterisk between two characters of a formula ("coef*ambient*material", quoted from the
+# slides) is a product, not emphasis; emphasis opens after a space ("points *towards* it").
+PRODUCT = re.compile(r"(?<=[\w)\]])\*(?=[\w(])")
+
+
+def _products_escaped(text: str) -> str:
+    """Escape the products' asterisks outside code (code spans, fenced and indented blocks)."""
+    out, fenced = [], False
+    for line in text.split("\n"):
+        if line.lstrip().startswith("```"):
+            fenced = not fenced
+        if fenced or line.startswith("    ") or line.lstrip().startswith("```"):
+            out.append(line)
+            continue
+        parts = line.split("`")
+        parts[::2] = [PRODUCT.sub(r"\\*", part) for part in parts[::2]]
+        out.append("`".join(parts))
+    return "\n".join(out)
+
+
+def markdown_html(text: str) -> str:
+    """CommonMark with tables; raw HTML in the text is escaped, never passed through."""
+    from markdown_it import MarkdownIt
+
+    md = MarkdownIt("commonmark", {"html": False}).enable("table")
+    return md.render(_products_escaped(text))
+
+
+def _ssim(value: float) -> str:
+    """SSIM near 1 as 1 - its distance from 1, which is what tells two such images apart."""
+    if math.isfinite(value) and 0 < 1 - value < 1e-3:
+        return f"1 \u2212 {_number(1 - value, 2)}"
+    return _number(value, 5)
+
+
+def _number(value: float, digits: int = 3) -> str:
+    if isinstance(value, float) and math.isnan(value):
+        return "NaN"
+    if isinstance(value, float) and math.isinf(value):
+        return "∞"
+    if value == 0:
+        return "0"
+    if 1e-3 <= abs(value) < 1e4:
+        return f"{value:.{digits + 1}g}"
+    return f"{value:.{digits}e}".replace("e-0", "e-").replace("e+0", "e+")
+
+
+def _seconds(value: float) -> str:
+    return f"{value:.3f} s" if value < 10 else f"{value:.1f} s"
+
+
+def environment() -> Any:
+    import jinja2
+
+    env = jinja2.Environment(
+        loader=jinja2.FileSystemLoader(TEMPLATES),
+        autoescape=jinja2.select_autoescape(["html"]),
+        undefined=jinja2.StrictUndefined,
+        trim_blocks=True,
+        lstrip_blocks=True,
+    )
+    env.filters["num"] = _number
+    env.filters["seconds"] = _seconds
+    env.filters["ssim"] = _ssim
+    env.filters["sentence"] = lambda v: v[:1].upper() + v[1:]
+    env.filters["pct"] = lambda v: f"{100 * v:.3g}%"
+    env.globals["NAMES"] = NAMES
+    return env
+
+
+class Assets:
+    """The page's images: written as PNG files into the page's directory and named by a
+    relative path; with ``inline``, read back as data: URIs and not kept."""
+
+    def __init__(self, directory: Path, inline: bool) -> None:
+        self.directory = directory
+        self.inline = inline
+
+    def _src(self, path: Path) -> str:
+        if not self.inline:
+            return path.relative_to(self.directory).as_posix()
+        data = base64.b64encode(path.read_bytes()).decode("ascii")
+        path.unlink()
+        return f"data:image/png;base64,{data}"
+
+    def image(self, name: str, image: np.ndarray) -> str:
+        from tracer.image import save_image
+
+        path = self.directory / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        save_image(path, np.asarray(image)[..., :3])
+        return self._src(path)
+
+    def heat_map(self, name: str, reference: np.ndarray, test: np.ndarray) -> str:
+        from reference.metrics import heat_map
+
+        path = self.directory / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        heat_map(reference, test, path)
+        return self._src(path)
+
+
+def _jsonable(value: Any) -> Any:
+    from reference.compare import _jsonable as plain
+
+    return plain(value)
+
+
+def render_lesson(page: LessonPage, directory: Path, *, inline: bool, index: bool) -> Path:
+    """Write ``directory/index.html`` (and its images, and metrics.json: the comparison rows
+    the page shows) for one lesson; ``index``: the page links to the course's index."""
+    directory.mkdir(parents=True, exist_ok=True)
+    assets = Assets(directory, inline)
+    scenes = []
+    for s in page.scenes:
+        ours = s.runs["rtlab"].image
+        images = {name: assets.image(f"{s.check.name}-{name}.png", run.image)
+                  for name, run in s.runs.items()}  # fmt: skip
+        heat = {name: assets.heat_map(f"{s.check.name}-diff-{name}.png", s.runs[name].image, ours)
+                for name in s.check.references}  # fmt: skip
+        scenes.append({"page": s, "images": images, "heat": heat})
+    mistakes = []
+    for m in page.mistakes_shown:
+        entry: dict[str, Any] = {"shown": m}
+        if m.image is not None and m.correct is not None:
+            stem = f"mistakes/{m.mistake.name}-{m.scene}"
+            entry["image"] = assets.image(f"{stem}.png", m.image)
+            entry["correct"] = assets.image(f"{stem}-correct.png", m.correct)
+            entry["heat"] = assets.heat_map(f"{stem}-diff.png", m.correct, m.image)
+        mistakes.append(entry)
+    html = (
+        environment()
+        .get_template("lesson.html")
+        .render(
+            page=page,
+            text_html=markdown_html(page.text_markdown) if page.text_markdown else "",
+            scenes=scenes,
+            mistakes=mistakes,
+            scale=SCALE,
+            index=index,
+        )
+    )
+    (directory / "index.html").write_text(html)
+    rows = [r.as_dict() for r in page.rows]
+    (directory / "metrics.json").write_text(json.dumps(_jsonable(rows), indent=2) + "\n")
+    with contextlib.suppress(OSError):
+        (directory / "mistakes").rmdir()  # empty when inlined
+    return directory / "index.html"
+
+
+def render_index(pages: list[LessonPage], directory: Path, *, command: str, seconds: float,
+                 made: str) -> Path:  # fmt: skip
+    html = (
+        environment()
+        .get_template("index.html")
+        .render(pages=pages, command=command, seconds=seconds, made=made)
+    )
+    path = directory / "index.html"
+    path.write_text(html)
+    return path
+
+
+@contextlib.contextmanager
+def staged(target: Path) -> Iterator[Path]:
+    """A temporary directory beside ``target``; on success it replaces ``target`` (the old one
+    renamed aside first, then removed); on failure it is removed and ``target`` is untouched."""
+    target = Path(target)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    stage = Path(tempfile.mkdtemp(prefix=f".{target.name}.tmp-", dir=target.parent))
+    try:
+        yield stage
+    except BaseException:
+        shutil.rmtree(stage, ignore_errors=True)
+        raise
+    os.chmod(stage, 0o755)  # mkdtemp's 0700 would hide the site from a web server
+    old = None
+    if target.exists():
+        old = Path(tempfile.mkdtemp(prefix=f".{target.name}.old-", dir=target.parent))
+        os.rename(target, old / target.name)
+    os.rename(stage, target)
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)
+
+
+def write_lesson_site(out: Path, page: LessonPage, *, inline: bool = False) -> Path:
+    """``out/Lnn/index.html``, replacing that lesson's directory only."""
+    with staged(Path(out) / page.lesson.id) as stage:
+        render_lesson(page, stage, inline=inline, index=(Path(out) / "index.html").exists())
+    return Path(out) / page.lesson.id / "index.html"
+
+
+def write_course_site(
+    out: Path,
+    build: Callable[[str], LessonPage],
+    lesson_ids: list[str],
+    *,
+    inline: bool = False,
+    command: str = "",
+    progress: Callable[[str], None] = lambda line: None,
+) -> Path:
+    """Every lesson's page and the index, the whole of ``out`` replaced at the end."""
+    import time
+
+    start = time.perf_counter()
+    with staged(Path(out)) as stage:
+        pages = []
+        for lesson_id in lesson_ids:
+            page = build(lesson_id)
+            render_lesson(page, stage / lesson_id, inline=inline, index=True)
+            pages.append(page)
+            progress(f"{lesson_id}: {len(page.scenes)} scenes, "
+                     f"{len(page.mistakes_shown)} known-wrong versions rendered")  # fmt: skip
+        made = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
+        render_index(pages, stage, command=command, seconds=time.perf_counter() - start,
+                     made=made)  # fmt: skip
+    return Path(out) / "index.html"
