@@ -72,9 +72,39 @@ class Outcome:
         return self.kind == "ok"
 
 
-def _limit(limits: Limits) -> None:  # runs in the child, before exec
+def memory_available() -> int:
+    """The memory this process may use: the machine's, or its container's (cgroup v2
+    memory.max, v1 memory.limit_in_bytes) where that is less; $RTLAB_SANDBOX_MEMORY (bytes,
+    or with a K, M or G suffix) says it instead (to try a smaller machine's limits)."""
+    given = os.environ.get("RTLAB_SANDBOX_MEMORY", "").strip().upper()
+    if given:
+        scale = {"K": 1 << 10, "M": 1 << 20, "G": 1 << 30}.get(given[-1], 1)
+        return int(float(given.rstrip("KMG")) * scale)
+    sizes = [os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")]
+    for path in ("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes"):
+        with contextlib.suppress(OSError, ValueError):
+            sizes.append(int(Path(path).read_text().split()[0]))  # "max" is no limit
+    return min(sizes)
+
+
+# The least address space a child gets whatever the machine: the compiler needs about 300 MiB
+# for bindings.cpp (a build under 256 MiB runs out, under 320 MiB it passes; the render child
+# passes under 256 MiB).
+MEMORY_FLOOR = 384 << 20
+
+
+def address_space(limits: Limits, available: int | None = None) -> int:
+    """A child's address-space limit: its own, but at most half the memory available, so that
+    two children at once (the probe build beside the extension build) leave the grader room. On
+    Gradescope's default of 768 MB a student's runaway allocation then ends as this child's
+    "memory" outcome, never as the container's OOM killer taking the grader and its results."""
+    available = memory_available() if available is None else available
+    return min(limits.memory_bytes, max(available // 2, MEMORY_FLOOR))
+
+
+def _limit(limits: Limits, memory: int) -> None:  # runs in the child, before exec
     resource.setrlimit(resource.RLIMIT_CPU, (limits.cpu_s, limits.cpu_s + 1))
-    resource.setrlimit(resource.RLIMIT_AS, (limits.memory_bytes, limits.memory_bytes))
+    resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
     resource.setrlimit(resource.RLIMIT_FSIZE, (limits.file_bytes, limits.file_bytes))
     resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
 
@@ -90,6 +120,7 @@ MEMORY_WORDS = ("std::bad_alloc", "Cannot allocate memory", "out of memory", "vi
 def run_limited(command: list[str], cwd: Path, limits: Limits, what: str) -> Outcome:
     """Run `command` in `cwd` under `limits`; `what` names it in the message ("the build")."""
     start = time.monotonic()
+    memory = address_space(limits)
     # The C locale: the compiler's messages in plain ASCII quotes, the same on every machine.
     env = {**os.environ, "LC_ALL": "C", "LANG": "C"}
     process = subprocess.Popen(
@@ -100,7 +131,7 @@ def run_limited(command: list[str], cwd: Path, limits: Limits, what: str) -> Out
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,
         start_new_session=True,  # its own process group, killed whole on a timeout
-        preexec_fn=lambda: _limit(limits),
+        preexec_fn=lambda: _limit(limits, memory),
     )
     chunks: list[bytes] = []
     flooded = threading.Event()
@@ -152,7 +183,7 @@ def run_limited(command: list[str], cwd: Path, limits: Limits, what: str) -> Out
                 code,
                 output,
                 seconds,
-                f"{what} ran out of memory (the limit is {limits.memory_bytes >> 20} MiB)",
+                f"{what} ran out of memory (the limit is {memory >> 20} MiB)",
             )
         name = signal.Signals(-code).name if code is not None else "?"
         return Outcome("crash", code, output, seconds, f"{what} crashed: {name}")

@@ -6,6 +6,7 @@ The solution itself passes."""
 
 from __future__ import annotations
 
+import os
 import shutil
 
 import pytest
@@ -189,3 +190,26 @@ def test_a_tree_before_l13_renders_with_the_textbook_forms(tmp_path):
     got = float(run.output.rsplit(" sum ", 1)[1].split()[0])
     want = render_with_stats(load_scene(scene), threads=2, progress=False, packets=False)
     assert abs(got - float(want.image.sum(dtype="float64"))) <= 9
+
+
+def test_the_limits_fit_a_small_machine(tmp_path, monkeypatch):
+    """Gradescope's default machine has 768 MB: each child gets at most half of it (384 MiB),
+    so two children at once leave the grader room, and a student's allocation that 512 MiB
+    would allow ends as the child's own "memory" outcome, never as the container's OOM killer
+    taking the grader. The build (about 300 MiB of address space) still fits."""
+    from lessons.sandbox import MEMORY_FLOOR, address_space, memory_available
+
+    assert address_space(Limits(), available=768 << 20) == 384 << 20
+    assert address_space(Limits(), available=64 << 30) == Limits().memory_bytes
+    assert address_space(Limits(), available=256 << 20) == MEMORY_FLOOR
+    assert 0 < memory_available() <= os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    monkeypatch.setenv("RTLAB_SANDBOX_MEMORY", "768M")
+    assert memory_available() == 768 << 20
+    body = "    std::vector<char> big(size_t(400) << 20, 1);\n    return big[12345];\n"
+    build = build_probe(submit(tmp_path, body), MAIN, tmp_path / "w")
+    assert build.outcome.ok, build.outcome.message
+    run = run_probe(build, [], QUICK)
+    assert run.kind == "memory" and "(the limit is 384 MiB)" in run.message, run.message
+    monkeypatch.delenv("RTLAB_SANDBOX_MEMORY")
+    run = run_probe(build, [], QUICK)  # the same program under 512 MiB: the injection mattered
+    assert run.kind == "ok", (run.kind, run.message)
