@@ -212,7 +212,8 @@ def references(check: SceneCheck, render: bool = True) -> dict[str, np.ndarray]:
 # Loads the built extension as tracer._core and, for each job from the first, renders the
 # classic image (one ray at a time: packets=False, the student's code as written) and the aov,
 # saving them with the ray counts; a line with the token before and after each, so that a
-# crash is charged to the scene that was rendering. The tracer package is the one in ROOT (the
+# crash is charged to the scene that was rendering. A stub called on the child's own thread
+# (the camera's, set before the workers start) is a RuntimeError: it exits as a worker's does. The tracer package is the one in ROOT (the
 # child's directory), never an editable install's: an unpacked autograder runs its own.
 RENDER_CHILD = """
 import importlib.util, json, sys
@@ -232,8 +233,14 @@ for k in range(int(sys.argv[4]), len(jobs)):
     scene = load_scene(job["scene"])
     if job["size"]:
         scene = scene.with_overrides(width=job["size"][0], height=job["size"][1])
-    result = render_with_stats(scene, threads=2, progress=False, packets=False)
-    aov = render_with_stats(scene.with_overrides(integrator="aov"), threads=2, progress=False)
+    try:
+        result = render_with_stats(scene, threads=2, progress=False, packets=False)
+        aov = render_with_stats(scene.with_overrides(integrator="aov"), threads=2, progress=False)
+    except RuntimeError as error:  # a stub called on this thread (the camera's initialize)
+        if not str(error).startswith("not implemented:"):
+            raise
+        print(error, flush=True)
+        sys.exit(86)  # what a stub in a worker thread exits with (NOT_IMPLEMENTED_STATUS)
     np.savez(job["out"], image=result.image, aov=aov.image,
              rays=np.array(json.dumps(result.rays)))
     print(token, "done", k, flush=True)
