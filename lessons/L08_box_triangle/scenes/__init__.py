@@ -56,9 +56,6 @@ P0: Vec = (-3.0, -2.0, -1.0)
 TRI_NG = _cross(_sub((3.0, -2.0, 0.5), P0), _sub((0.0, 3.0, -0.5), P0))  # (-7.5, 1.5, 30)
 TRI_N = _unit(TRI_NG)
 TRI_T = 4.0 - P0[2] - (TRI_NG[0] * P0[0] + TRI_NG[1] * P0[1]) / TRI_NG[2]
-TRI_P: Vec = (0.0, 0.0, 4.0 - TRI_T)
-TRI_NL = _dot(TRI_N, _unit(_sub((-2.0, 2.0, 4.0), TRI_P)))
-TRI_COLOR = tuple(0.1 * c + 0.8 * TRI_NL * 0.7 * c for c in (0.85, 0.85, 0.8))
 
 # float32 output: half an ulp of a value below 8 is 4.8e-7, of a unit normal's components
 # 6e-8; the double arithmetic's roundings ~1e-15. 2e-6 holds both with room; the normal left
@@ -134,15 +131,13 @@ SCENES = [
         "L08",
         "triangle_normal",
         "the triangle's point and normal",
-        "a large tilted triangle lit from the upper left",
+        "a large tilted triangle filling the view (the aov's normal)",
         visibility=HIDDEN,
         analytic=(
             Analytic(40, 30, "depth", (TRI_T,), FLOAT32,
                      "the centre ray meets the plane n.(p - p0) = 0, n = (-7.5, 1.5, 30)"),
             Analytic(40, 30, "normal", TRI_N, FLOAT32,
                      "(p1 - p0) x (p2 - p0) made unit length"),
-            Analytic(40, 30, "color", TRI_COLOR, FLOAT32,
-                     "0.1 c + 0.8 N.L 0.7 c with that unit N, L towards (-2, 2, 4)"),
         ),  # fmt: skip
         hint="the normal is the unit cross product of two edges; the point is o + t d",
     ),
