@@ -172,12 +172,39 @@ def reference_file(check: SceneCheck) -> Path:
 
 def render_references(check: SceneCheck) -> dict[str, np.ndarray]:
     """POV-Ray's image and per-pixel bound, Mitsuba's image (llvm_ad_rgb, as the reference
-    suite) and Mitsuba's aov (scalar_rgb: depth, object id, normal)."""
+    suite) and Mitsuba's aov (scalar_rgb: depth, object id, normal). A stereo pair's: each eye
+    rendered alone (the converters take one eye: tracer.render.eye_scene), then laid out."""
+    return _references_of(check.load())
+
+
+# Where a two-eye stereo layout puts the right eye: beside the left (side_by_side), below it
+# (over_under). An anaglyph mixes the eyes' colours: no layout of the references' arrays.
+STEREO_AXIS = {"side_by_side": 1, "over_under": 0}
+
+
+def _stereo_layout(scene: Any) -> str | None:
+    st = scene.camera.stereo
+    if st is None or st.layout in ("left", "right"):
+        return None
+    if st.layout not in STEREO_AXIS:
+        raise SceneCheckError(
+            f"{scene.source}: camera.stereo.layout {st.layout!r}: a scene check takes "
+            f"{', '.join(STEREO_AXIS)}, left or right (the references render one eye at a time)"
+        )
+    return st.layout
+
+
+def _references_of(scene: Any) -> dict[str, np.ndarray]:
     from reference.geometry import mitsuba_geometry
     from reference.mitsuba import run_mitsuba
     from reference.povray import run_povray
+    from tracer.render import eye_scene
 
-    scene = check.load()
+    layout = _stereo_layout(scene)
+    if layout is not None:
+        eyes = [_references_of(eye_scene(scene, eye)) for eye in ("left", "right")]
+        axis = STEREO_AXIS[layout]
+        return {k: np.concatenate([eyes[0][k], eyes[1][k]], axis=axis) for k in eyes[0]}
     pov = run_povray(scene, threads=2)
     out: dict[str, np.ndarray] = {"povray": pov.image, "povray_bound": pov.error_bound}
     geometry = mitsuba_geometry(scene)
@@ -395,8 +422,18 @@ def expected_rays(scene: Any, refs: dict[str, np.ndarray]) -> tuple[dict[str, in
     light in front of each primary hit whose material has a light term (10_classic.h's
     local_color()), counted from Mitsuba's hits and normals; hits where |N.L| < 1e-6 may go
     either way (float32 against double): the second value is their number, the slack."""
+    from tracer.render import eye_scene
     from tracer.scene import PointLight
 
+    layout = _stereo_layout(scene)
+    if layout is not None:  # each eye's share of the references' arrays, counted alone
+        axis, total, slack = STEREO_AXIS[layout], {}, 0
+        for k, eye in enumerate(("left", "right")):
+            part = {n: np.array_split(a, 2, axis=axis)[k] for n, a in refs.items()}
+            counts, more = expected_rays(eye_scene(scene, eye), part)
+            total = {n: total.get(n, 0) + v for n, v in counts.items()}
+            slack += more
+        return total, slack
     cam = scene.camera
     counts = {"primary": cam.width * cam.height * scene.render.spp}
     if any(m.reflectivity > 0 for m in scene.materials.values()) and scene.render.max_depth > 1:
@@ -404,9 +441,11 @@ def expected_rays(scene: Any, refs: dict[str, np.ndarray]) -> tuple[dict[str, in
     ids = refs["aov_id"]
     hit = ids >= 0
     depth = np.where(hit, refs["aov_depth"], 0.0)
-    eye = np.array(cam.eye, dtype=np.float64)
-    # Primary directions through pixel centres (03_camera.h's primary_ray()).
-    forward = np.array(cam.look_at) - eye
+    eye_at, look_at, shift = cam.one_eye() if cam.stereo is not None else (cam.eye, cam.look_at, 0)
+    eye = np.array(eye_at, dtype=np.float64)
+    # Primary directions through pixel centres (03_camera.h's primary_ray()); a stereo eye's
+    # window shifted along right (stereo_eye()).
+    forward = np.array(look_at) - eye
     forward /= np.linalg.norm(forward)
     right = np.cross(forward, np.array(cam.up, dtype=np.float64))
     right /= np.linalg.norm(right)
@@ -415,7 +454,7 @@ def expected_rays(scene: Any, refs: dict[str, np.ndarray]) -> tuple[dict[str, in
     pw = ph * cam.width / cam.height
     i, j = np.meshgrid(np.arange(cam.width) + 0.5, np.arange(cam.height) + 0.5)
     x, y = i / cam.width - 0.5, 0.5 - j / cam.height
-    d = forward + (x * pw)[..., None] * right + (y * ph)[..., None] * up
+    d = forward + (x * pw + shift)[..., None] * right + (y * ph)[..., None] * up
     d /= np.linalg.norm(d, axis=-1, keepdims=True)
     p = eye + depth[..., None] * d
     n = refs["aov_normal"].astype(np.float64)
