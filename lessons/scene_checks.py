@@ -240,8 +240,9 @@ def references(check: SceneCheck, render: bool = True) -> dict[str, np.ndarray]:
 # classic image (one ray at a time: packets=False, the student's code as written) and the aov,
 # saving them with the ray counts; a line with the token before and after each, so that a
 # crash is charged to the scene that was rendering. A stub called on the child's own thread
-# (the camera's, set before the workers start) is a RuntimeError: it exits as a worker's does. The tracer package is the one in ROOT (the
-# child's directory), never an editable install's: an unpacked autograder runs its own.
+# (the camera's, set before the workers start) is a RuntimeError: it exits as a worker's does.
+# The tracer package is the one in ROOT (the child's directory), never an editable install's:
+# an unpacked autograder runs its own.
 RENDER_CHILD = """
 import importlib.util, json, sys
 sys.meta_path[:] = [f for f in sys.meta_path if not type(f).__module__.startswith("_editable")]

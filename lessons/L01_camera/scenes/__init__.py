@@ -42,7 +42,9 @@ def ray(eye: Vec, look_at: Vec, up: Vec, fov_y: float, width: int, height: int, 
     w = h * width / height
     x = (i + 0.5) / width - 0.5
     y = 0.5 - (j + 0.5) / height
-    return _unit(tuple(f + x * w * r + y * h * u for f, r, u in zip(forward, right, true_up)))  # type: ignore[return-value]
+    return _unit(
+        tuple(f + x * w * r + y * h * u for f, r, u in zip(forward, right, true_up, strict=True))
+    )  # type: ignore[return-value]
 
 
 def sphere_t(o: Vec, d: Vec, centre: Vec, radius: float) -> float:
@@ -72,14 +74,15 @@ WIDE_T = -WIDE[0][1] / WIDE_D[1]
 AXIS = ((0.0, 0.0, 4.0), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0), 40.0, 81, 61)
 AXIS_D = ray(*AXIS, 50, 22)
 AXIS_T = sphere_t(AXIS[0], AXIS_D, (0.0, 0.0, 0.0), 1.0)
-AXIS_P: Vec = tuple(o + AXIS_T * d for o, d in zip(AXIS[0], AXIS_D))  # type: ignore[assignment]
+AXIS_P: Vec = tuple(o + AXIS_T * d for o, d in zip(AXIS[0], AXIS_D, strict=True))  # type: ignore[assignment]
 AXIS_NL = _dot(AXIS_P, _unit(_sub((0.0, 0.0, 6.0), AXIS_P)))
 AXIS_COLOR = tuple(0.1 * c + 0.8 * AXIS_NL * c for c in (0.9, 0.85, 0.8))
 
-# float32 output: half an ulp of a value below 8 is 4.8e-7 (of the background's 0.1, 3.7e-9); the double arithmetic's roundings
-# are ~1e-15 relative. 2e-6 holds both with room and is far below what each check separates:
-# the half pixel added twice moves wide_aspect's floor distance by 0.09 (4.690 against
-# 4.780), a frame scaled by a wrong field of view moves fov_edge's silhouette by pixels.
+# float32 output: half an ulp of a value below 8 is 4.8e-7 (of the background's 0.1, 3.7e-9);
+# the double arithmetic's roundings are ~1e-15 relative. 2e-6 holds both with room and is far
+# below what each check separates: the half pixel added twice moves wide_aspect's floor
+# distance by 0.09 (4.690 against 4.780), a frame scaled by a wrong field of view moves
+# fov_edge's silhouette by pixels.
 FLOAT32 = 2e-6
 
 SCENES = [
@@ -90,15 +93,32 @@ SCENES = [
         "a unit sphere whose silhouette falls between pixels 55 and 56 of the middle row",
         analytic=(
             Analytic(40, 30, "depth", (4.0,), FLOAT32, "the axis meets the sphere 5 - 1 away"),
-            Analytic(55, 30, "depth", (EDGE_T,), FLOAT32,
-                     "the nearer root along pixel 55's centre ray, fov_y 44, aspect 81/61"),
-            Analytic(56, 30, "color", (0.1, 0.2, 0.3), FLOAT32,
-                     "pixel 56's ray passes 0.2120 off the axis, the silhouette at "
-                     "1/sqrt(24) = 0.2041: the background"),
-            Analytic(40, 14, "color", (0.1, 0.2, 0.3), FLOAT32,
-                     "row 14 is 16 pixels above the axis: beyond the silhouette, the "
-                     "background"),
-        ),  # fmt: skip
+            Analytic(
+                55,
+                30,
+                "depth",
+                (EDGE_T,),
+                FLOAT32,
+                "the nearer root along pixel 55's centre ray, fov_y 44, aspect 81/61",
+            ),
+            Analytic(
+                56,
+                30,
+                "color",
+                (0.1, 0.2, 0.3),
+                FLOAT32,
+                "pixel 56's ray passes 0.2120 off the axis, the silhouette at "
+                "1/sqrt(24) = 0.2041: the background",
+            ),
+            Analytic(
+                40,
+                14,
+                "color",
+                (0.1, 0.2, 0.3),
+                FLOAT32,
+                "row 14 is 16 pixels above the axis: beyond the silhouette, the background",
+            ),
+        ),
         hint="plane_height = 2 tan(fov_y / 2) with fov_y in radians, plane_width = "
         "plane_height x width / height; right = forward x up",
     ),
@@ -109,9 +129,15 @@ SCENES = [
         "three coloured spheres and a floor seen from above and aside, the up vector tilted",
         visibility=HIDDEN,
         analytic=(
-            Analytic(40, 30, "depth", (OBLIQUE_T,), FLOAT32,
-                     "the axis meets the grey sphere at look_at: |look_at - eye| - 0.6"),
-        ),  # fmt: skip
+            Analytic(
+                40,
+                30,
+                "depth",
+                (OBLIQUE_T,),
+                FLOAT32,
+                "the axis meets the grey sphere at look_at: |look_at - eye| - 0.6",
+            ),
+        ),
         hint="forward, right = forward x up and true_up = right x forward, each unit length: "
         "an up vector not perpendicular to the view is made so",
     ),
@@ -121,9 +147,15 @@ SCENES = [
         "primary rays through pixel centres",
         "three spheres in a row above a floor in a wide image (121 x 41)",
         analytic=(
-            Analytic(0, 40, "depth", (WIDE_T,), FLOAT32,
-                     "the bottom-left pixel centre's ray meets the floor y = 0 at -eye_y / d_y"),
-        ),  # fmt: skip
+            Analytic(
+                0,
+                40,
+                "depth",
+                (WIDE_T,),
+                FLOAT32,
+                "the bottom-left pixel centre's ray meets the floor y = 0 at -eye_y / d_y",
+            ),
+        ),
         hint="x = (i + 0.5) / width - 0.5 and y = 0.5 - (j + 0.5) / height: the centre of each "
         "pixel, row 0 at the top",
     ),
@@ -135,11 +167,23 @@ SCENES = [
         visibility=HIDDEN,
         analytic=(
             Analytic(40, 30, "depth", (3.0,), FLOAT32, "the axis meets the sphere 4 - 1 away"),
-            Analytic(50, 22, "depth", (AXIS_T,), FLOAT32,
-                     "the nearer root along pixel (50, 22)'s unit direction"),
-            Analytic(50, 22, "color", AXIS_COLOR, FLOAT32,
-                     "0.1 c + 0.8 N.L c at p = o + t d, N = p, L towards (0, 0, 6)"),
-        ),  # fmt: skip
+            Analytic(
+                50,
+                22,
+                "depth",
+                (AXIS_T,),
+                FLOAT32,
+                "the nearer root along pixel (50, 22)'s unit direction",
+            ),
+            Analytic(
+                50,
+                22,
+                "color",
+                AXIS_COLOR,
+                FLOAT32,
+                "0.1 c + 0.8 N.L c at p = o + t d, N = p, L towards (0, 0, 6)",
+            ),
+        ),
         hint="p = o + t d with a unit d: t is the distance along the ray",
     ),
 ]

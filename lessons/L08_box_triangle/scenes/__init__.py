@@ -69,11 +69,23 @@ SCENES = [
         "the axis-aligned box (slab test)",
         "a box on a floor seen from above, the left and the front",
         analytic=(
-            Analytic(40, 30, "depth", (CORNER_T,), FLOAT32,
-                     "the centre ray's entry: the largest of the three slabs' near t"),
-            Analytic(40, 30, "normal", CORNER_N, FLOAT32,
-                     "the outward normal of that slab's face (the front face, +z)"),
-        ),  # fmt: skip
+            Analytic(
+                40,
+                30,
+                "depth",
+                (CORNER_T,),
+                FLOAT32,
+                "the centre ray's entry: the largest of the three slabs' near t",
+            ),
+            Analytic(
+                40,
+                30,
+                "normal",
+                CORNER_N,
+                FLOAT32,
+                "the outward normal of that slab's face (the front face, +z)",
+            ),
+        ),
         hint="each slab's two t, (min - o) / d and (max - o) / d, swapped where d's component "
         "is negative; the entry is the largest near t, the exit the smallest far t",
     ),
@@ -134,11 +146,16 @@ SCENES = [
         "a large tilted triangle filling the view (the aov's normal)",
         visibility=HIDDEN,
         analytic=(
-            Analytic(40, 30, "depth", (TRI_T,), FLOAT32,
-                     "the centre ray meets the plane n.(p - p0) = 0, n = (-7.5, 1.5, 30)"),
-            Analytic(40, 30, "normal", TRI_N, FLOAT32,
-                     "(p1 - p0) x (p2 - p0) made unit length"),
-        ),  # fmt: skip
+            Analytic(
+                40,
+                30,
+                "depth",
+                (TRI_T,),
+                FLOAT32,
+                "the centre ray meets the plane n.(p - p0) = 0, n = (-7.5, 1.5, 30)",
+            ),
+            Analytic(40, 30, "normal", TRI_N, FLOAT32, "(p1 - p0) x (p2 - p0) made unit length"),
+        ),
         hint="the normal is the unit cross product of two edges; the point is o + t d",
     ),
 ]

@@ -52,7 +52,9 @@ def ray(eye: Vec, look_at: Vec, up: Vec, fov_y: float, width: int, height: int, 
     h = 2 * math.tan(math.radians(fov_y) / 2)
     w = h * width / height
     x, y = (i + 0.5) / width - 0.5, 0.5 - (j + 0.5) / height
-    return _unit(tuple(f + x * w * r + y * h * u for f, r, u in zip(forward, right, true_up)))  # type: ignore[return-value]
+    return _unit(
+        tuple(f + x * w * r + y * h * u for f, r, u in zip(forward, right, true_up, strict=True))
+    )  # type: ignore[return-value]
 
 
 def smooth_normal(o: Vec, d: Vec) -> tuple[float, Vec, Vec]:
@@ -72,7 +74,9 @@ def smooth_normal(o: Vec, d: Vec) -> tuple[float, Vec, Vec]:
         if b1 < 0 or b2 < 0 or b1 + b2 > 1 or t <= 0 or (best and t >= best[0]):
             continue
         n0, n1, n2 = (_unit(VERTICES[k]) for k in f)
-        blend = tuple((1 - b1 - b2) * a + b1 * b + b2 * c for a, b, c in zip(n0, n1, n2))
+        blend = tuple(
+            (1 - b1 - b2) * a + b1 * b + b2 * c for a, b, c in zip(n0, n1, n2, strict=True)
+        )
         best = (t, _unit(blend), _unit(_cross(e1, e2)))  # type: ignore[arg-type]
     assert best is not None, "the ray misses the icosahedron"
     return best
@@ -103,11 +107,17 @@ SCENES = [
         "Gouraud shading: the vertex normals weighted by the barycentric coordinates",
         "the icosahedron (20 faces), smooth-shaded, lit from behind the eye",
         analytic=(
-            Analytic(40, 30, "normal", ICO_CENTRE[1], FLOAT32,
-                     "b0 n0 + b1 n1 + b2 n2 made unit, n the unit vectors to the hit face's "
-                     "vertices, b the hit's barycentric coordinates"),
+            Analytic(
+                40,
+                30,
+                "normal",
+                ICO_CENTRE[1],
+                FLOAT32,
+                "b0 n0 + b1 n1 + b2 n2 made unit, n the unit vectors to the hit face's "
+                "vertices, b the hit's barycentric coordinates",
+            ),
             Analytic(47, 24, "normal", ICO_OFF[1], FLOAT32, "the same at pixel (47, 24)"),
-        ),  # fmt: skip
+        ),
         hint="N = b0 n0 + b1 n1 + b2 n2 with b0 = 1 - b1 - b2, each weight with its own "
         "vertex (b1 with p1, b2 with p2), made unit length",
     ),
@@ -118,13 +128,31 @@ SCENES = [
         "the smooth icosahedron seen straight at a face's centroid, lit along the view",
         visibility=HIDDEN,
         analytic=(
-            Analytic(40, 30, "depth", (CENTROID_T,), FLOAT32,
-                     "|eye| - |centroid| = sqrt(48) - sqrt(3) (1 + phi) / 3"),
-            Analytic(40, 30, "normal", CENTROID_N, FLOAT32,
-                     "the mean of the three unit vertex normals, made unit: (-1, 1, 1) / sqrt 3"),
-            Analytic(40, 30, "color", CENTROID_COLOR, FLOAT32,
-                     "0.1 c + 0.8 N.L c with N.L = 1 (the light on the axis)"),
-        ),  # fmt: skip
+            Analytic(
+                40,
+                30,
+                "depth",
+                (CENTROID_T,),
+                FLOAT32,
+                "|eye| - |centroid| = sqrt(48) - sqrt(3) (1 + phi) / 3",
+            ),
+            Analytic(
+                40,
+                30,
+                "normal",
+                CENTROID_N,
+                FLOAT32,
+                "the mean of the three unit vertex normals, made unit: (-1, 1, 1) / sqrt 3",
+            ),
+            Analytic(
+                40,
+                30,
+                "color",
+                CENTROID_COLOR,
+                FLOAT32,
+                "0.1 c + 0.8 N.L c with N.L = 1 (the light on the axis)",
+            ),
+        ),
         hint="a blend of unit normals is shorter than 1 between different normals: normalize "
         "it again",
     ),

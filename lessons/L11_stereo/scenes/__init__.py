@@ -67,17 +67,41 @@ SCENES = [
         "a stereo pair over and under, on a wall at the convergence distance",
         visibility=HIDDEN,
         analytic=(
-            Analytic(40, 30, "depth", (wall_depth(40, 30, -1),), FLOAT32,
-                     "the left eye's centre pixel sees the wall's point on the axis: "
-                     "sqrt(C^2 + (s/2)^2)"),
-            Analytic(40, ROWS + 30, "depth", (wall_depth(40, 30, +1),), FLOAT32,
-                     "the right eye's centre pixel sees the same point"),
-            Analytic(10, 50, "depth", (wall_depth(10, 50, -1),), FLOAT32,
-                     "the left eye's pixel (10, 50) sees the wall point C (forward + x w right "
-                     "+ y h up) from the centre eye"),
-            Analytic(10, ROWS + 50, "depth", (wall_depth(10, 50, +1),), FLOAT32,
-                     "the right eye's pixel (10, 50) sees the same point"),
-        ),  # fmt: skip
+            Analytic(
+                40,
+                30,
+                "depth",
+                (wall_depth(40, 30, -1),),
+                FLOAT32,
+                "the left eye's centre pixel sees the wall's point on the axis: "
+                "sqrt(C^2 + (s/2)^2)",
+            ),
+            Analytic(
+                40,
+                ROWS + 30,
+                "depth",
+                (wall_depth(40, 30, +1),),
+                FLOAT32,
+                "the right eye's centre pixel sees the same point",
+            ),
+            Analytic(
+                10,
+                50,
+                "depth",
+                (wall_depth(10, 50, -1),),
+                FLOAT32,
+                "the left eye's pixel (10, 50) sees the wall point C (forward + x w right "
+                "+ y h up) from the centre eye",
+            ),
+            Analytic(
+                10,
+                ROWS + 50,
+                "depth",
+                (wall_depth(10, 50, +1),),
+                FLOAT32,
+                "the right eye's pixel (10, 50) sees the same point",
+            ),
+        ),
         hint="on the plane at the convergence distance both eyes' windows coincide: a point "
         "there has the same pixel in both eyes, and no point moves up or down between them",
     ),
