@@ -22,8 +22,9 @@ from lessons.probe import HIDDEN, XYZ, Probe, Vec, sqrt_fraction, vec_text
 LESSON = "L10"
 WEIGHTS = "Gouraud shading: the vertex normals weighted by the barycentric coordinates"
 UNIT = "Gouraud shading: the interpolated normal made unit length again"
-# The renormalisation's probes run the blend too.
-DEPENDS: dict[str, tuple[str, ...]] = {UNIT: (WEIGHTS,)}
+# The renormalisation's probes run the blend too; the weights' scenes (a lit smooth mesh) run
+# the renormalisation: a normal left short darkens them as much as a wrong blend.
+DEPENDS: dict[str, tuple[str, ...]] = {UNIT: (WEIGHTS,), WEIGHTS: (UNIT,)}
 
 
 def _dec(x: Fraction) -> Decimal:
