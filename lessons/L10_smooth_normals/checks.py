@@ -22,9 +22,8 @@ from lessons.probe import HIDDEN, XYZ, Probe, Vec, sqrt_fraction, vec_text
 LESSON = "L10"
 WEIGHTS = "Gouraud shading: the vertex normals weighted by the barycentric coordinates"
 UNIT = "Gouraud shading: the interpolated normal made unit length again"
-# The renormalisation's probes run the blend too; the weights' scenes (a lit smooth mesh) run
-# the renormalisation: a normal left short darkens them as much as a wrong blend.
-DEPENDS: dict[str, tuple[str, ...]] = {UNIT: (WEIGHTS,), WEIGHTS: (UNIT,)}
+# The renormalisation's probes run the blend too.
+DEPENDS: dict[str, tuple[str, ...]] = {UNIT: (WEIGHTS,)}
 
 
 def _dec(x: Fraction) -> Decimal:
