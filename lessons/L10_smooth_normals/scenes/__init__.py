@@ -6,7 +6,15 @@ Both references interpolate the same vertex normals (POV-Ray's mesh2 normal_vect
 PLY vertex normals: converters/). The analytic values are computed here in double precision:
 by the icosahedron's symmetry each vertex normal is the unit vector to the vertex, and the hit
 and its barycentric coordinates follow from the ray and the faces (Moeller-Trumbore written out
-below), never from the tracer."""
+below), never from the tracer.
+
+Both scenes are the renormalisation's concept: a lit smooth mesh runs the whole smooth normal,
+the blend and then its renormalisation, and a normal left short darkens it as much as a wrong
+weight changes it. checks.py's DEPENDS lets the renormalisation's checks follow from the
+weights' (its probes run the blend too): a wrong weight is named by the weights' probes, the
+scenes listed as following from it; a normal left short fails the scenes and the
+renormalisation's probes alone. Were a scene the weights', a short normal would fail it and be
+named a wrong weight (rtlab lesson check L10 caught that)."""
 
 import math
 
@@ -104,7 +112,7 @@ SCENES = [
     SceneCheck(
         "L10",
         "smooth_icosahedron",
-        "Gouraud shading: the vertex normals weighted by the barycentric coordinates",
+        "Gouraud shading: the interpolated normal made unit length again",
         "the icosahedron (20 faces), smooth-shaded, lit from behind the eye",
         analytic=(
             Analytic(
