@@ -34,10 +34,15 @@ PROBED = tuple(i for i in GRADED if (get_lesson(i).folder / "checks.py").exists(
 MISTAKES = [m for lesson in GRADED for m in mistakes(lesson)]
 # Graded with their lesson's scenes too (see the docstring): each changes the picture.
 SCENE_MISTAKES = {
+    ("L01", "left_handed_frame"),
     ("L02", "t1_before_t0"),
     ("L03", "sign_of_a_minus_o"),
     ("L04", "normal_not_turned"),
     ("L06", "phong_unclamped"),
+    ("L08", "triangle_one_sided"),
+    ("L09", "first_leaf_is_final"),
+    ("L10", "not_renormalised"),
+    ("L11", "eyes_swapped"),
 }
 
 
@@ -66,7 +71,8 @@ def test_the_solution_scores_full_marks(tmp_path: Path, lesson: str) -> None:
 
 def test_every_lesson_with_scenes_has_public_and_hidden_ones() -> None:
     scened = [lesson for lesson in GRADED if lesson_scenes(lesson)]
-    assert {"L02", "L03", "L04", "L05", "L06", "L07"} <= set(scened)
+    assert {"L01", "L02", "L03", "L04", "L05", "L06", "L07"} <= set(scened)
+    assert {"L08", "L09", "L10", "L11"} <= set(scened)
     for lesson in scened:
         checks = lesson_scenes(lesson)
         assert {c.visibility for c in checks} == {"visible", "after_published"}
