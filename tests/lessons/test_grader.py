@@ -42,7 +42,7 @@ SCENE_MISTAKES = {
     ("L08", "triangle_one_sided"),
     ("L09", "first_leaf_is_final"),
     ("L10", "not_renormalised"),
-    ("L11", "eyes_swapped"),
+    ("L11", "no_shift"),
 }
 
 

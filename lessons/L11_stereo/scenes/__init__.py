@@ -1,12 +1,19 @@
-"""L11's scene checks (lessons/scene_checks.py): a stereo pair side by side (the eye
-separation), each eye alone from an oblique camera (the parallel-axis asymmetric frustum), and a
+"""L11's scene checks (lessons/scene_checks.py): a stereo pair side by side (its parallax),
+each eye alone from an oblique camera (the parallel-axis asymmetric frustum), and a
 pair over and under on a wall at the convergence distance (no parallax there, none vertical).
 
 The references render a stereo pair one eye at a time, as the converters take it
 (tracer.render.eye_scene: POV-Ray's off-axis direction, Mitsuba's principal point offset;
 tests/reference/test_stereo_references.py), and the scene checks lay the eyes' images out as the
 layout does. The analytic values are computed here in double precision from the slide
-"Stereoscopy"'s geometry, never from the tracer."""
+"Stereoscopy"'s geometry, never from the tracer.
+
+Every picture of an eye runs both stereo_eye()'s eye separation and its window shift, so the
+scenes are the concepts that follow from others in checks.py's DEPENDS: the frustum's (which
+follows from the separation) and the parallax's (which follows from both). A wrong separation
+is named by the separation's probes and the scenes listed as following from it; a wrong window
+by the frustum's probes and scenes. A scene of the separation's own would fail for a wrong
+window too and name it a wrong separation (rtlab lesson check L11 caught that)."""
 
 import math
 
@@ -38,10 +45,10 @@ SCENES = [
     SceneCheck(
         "L11",
         "pair_side_by_side",
-        "the eye separation",
+        "parallax: none on the convergence plane, never vertical",
         "a stereo pair side by side: three spheres before, on and behind the convergence plane",
-        hint="each eye moves half the eye separation along right: the left eye to -right, the "
-        "right eye to +right; side_by_side puts the left eye's image on the left",
+        hint="each eye moves half the eye separation along right (the left eye to -right) and "
+        "shifts its window the other way; side_by_side puts the left eye's image on the left",
     ),
     SceneCheck(
         "L11",
