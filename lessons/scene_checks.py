@@ -172,14 +172,42 @@ def reference_file(check: SceneCheck) -> Path:
 
 def render_references(check: SceneCheck) -> dict[str, np.ndarray]:
     """POV-Ray's image and per-pixel bound, Mitsuba's image (llvm_ad_rgb, as the reference
-    suite) and Mitsuba's aov (scalar_rgb: depth, object id, normal)."""
+    suite) and Mitsuba's aov (scalar_rgb: depth, object id, normal). A stereo pair's: each eye
+    rendered alone (the converters take one eye: tracer.render.eye_scene), then laid out.
+    A path-traced scene's: Mitsuba's path tracer's mean and variance (render_path_references)."""
+    if isinstance(check, PathSceneCheck):
+        return render_path_references(check)
+    return _references_of(check.load())
+
+
+# Where a two-eye stereo layout puts the right eye: beside the left (side_by_side), below it
+# (over_under). An anaglyph mixes the eyes' colours: no layout of the references' arrays.
+STEREO_AXIS = {"side_by_side": 1, "over_under": 0}
+
+
+def _stereo_layout(scene: Any) -> str | None:
+    st = scene.camera.stereo
+    if st is None or st.layout in ("left", "right"):
+        return None
+    if st.layout not in STEREO_AXIS:
+        raise SceneCheckError(
+            f"{scene.source}: camera.stereo.layout {st.layout!r}: a scene check takes "
+            f"{', '.join(STEREO_AXIS)}, left or right (the references render one eye at a time)"
+        )
+    return st.layout
+
+
+def _references_of(scene: Any) -> dict[str, np.ndarray]:
     from reference.geometry import mitsuba_geometry
     from reference.mitsuba import run_mitsuba
     from reference.povray import run_povray
+    from tracer.render import eye_scene
 
-    if isinstance(check, PathSceneCheck):
-        return render_path_references(check)
-    scene = check.load()
+    layout = _stereo_layout(scene)
+    if layout is not None:
+        eyes = [_references_of(eye_scene(scene, eye)) for eye in ("left", "right")]
+        axis = STEREO_AXIS[layout]
+        return {k: np.concatenate([eyes[0][k], eyes[1][k]], axis=axis) for k in eyes[0]}
     pov = run_povray(scene, threads=2)
     out: dict[str, np.ndarray] = {"povray": pov.image, "povray_bound": pov.error_bound}
     geometry = mitsuba_geometry(scene)
@@ -214,8 +242,10 @@ def references(check: SceneCheck, render: bool = True) -> dict[str, np.ndarray]:
 # Loads the built extension as tracer._core and, for each job from the first, renders the
 # classic image (one ray at a time: packets=False, the student's code as written) and the aov,
 # saving them with the ray counts; a line with the token before and after each, so that a
-# crash is charged to the scene that was rendering. The tracer package is the one in ROOT (the
-# child's directory), never an editable install's: an unpacked autograder runs its own.
+# crash is charged to the scene that was rendering. A stub called on the child's own thread
+# (the camera's, set before the workers start) is a RuntimeError: it exits as a worker's does.
+# The tracer package is the one in ROOT (the child's directory), never an editable install's:
+# an unpacked autograder runs its own.
 RENDER_CHILD = """
 import importlib.util, json, sys
 sys.meta_path[:] = [f for f in sys.meta_path if not type(f).__module__.startswith("_editable")]
@@ -234,15 +264,21 @@ for k in range(int(sys.argv[4]), len(jobs)):
     scene = load_scene(job["scene"])
     if job["size"]:
         scene = scene.with_overrides(width=job["size"][0], height=job["size"][1])
-    if job.get("seeds"):  # a path-traced scene: independent renders, one per seed
-        runs = [render_with_stats(scene.with_overrides(seed=s), threads=2, progress=False,
-                                  packets=False) for s in job["seeds"]]
-        np.savez(job["out"], image=np.stack([r.image for r in runs]), aov=np.zeros(0),
-                 rays=np.array(json.dumps(runs[0].rays)))
-        print(token, "done", k, flush=True)
-        continue
-    result = render_with_stats(scene, threads=2, progress=False, packets=False)
-    aov = render_with_stats(scene.with_overrides(integrator="aov"), threads=2, progress=False)
+    try:
+        if job.get("seeds"):  # a path-traced scene: independent renders, one per seed
+            runs = [render_with_stats(scene.with_overrides(seed=s), threads=2, progress=False,
+                                      packets=False) for s in job["seeds"]]
+            np.savez(job["out"], image=np.stack([r.image for r in runs]), aov=np.zeros(0),
+                     rays=np.array(json.dumps(runs[0].rays)))
+            print(token, "done", k, flush=True)
+            continue
+        result = render_with_stats(scene, threads=2, progress=False, packets=False)
+        aov = render_with_stats(scene.with_overrides(integrator="aov"), threads=2, progress=False)
+    except RuntimeError as error:  # a stub called on this thread (the camera's initialize)
+        if not str(error).startswith("not implemented:"):
+            raise
+        print(error, flush=True)
+        sys.exit(86)  # what a stub in a worker thread exits with (NOT_IMPLEMENTED_STATUS)
     np.savez(job["out"], image=result.image, aov=aov.image,
              rays=np.array(json.dumps(result.rays)))
     print(token, "done", k, flush=True)
@@ -402,8 +438,18 @@ def expected_rays(scene: Any, refs: dict[str, np.ndarray]) -> tuple[dict[str, in
     light in front of each primary hit whose material has a light term (10_classic.h's
     local_color()), counted from Mitsuba's hits and normals; hits where |N.L| < 1e-6 may go
     either way (float32 against double): the second value is their number, the slack."""
+    from tracer.render import eye_scene
     from tracer.scene import PointLight
 
+    layout = _stereo_layout(scene)
+    if layout is not None:  # each eye's share of the references' arrays, counted alone
+        axis, total, slack = STEREO_AXIS[layout], {}, 0
+        for k, eye in enumerate(("left", "right")):
+            part = {n: np.array_split(a, 2, axis=axis)[k] for n, a in refs.items()}
+            counts, more = expected_rays(eye_scene(scene, eye), part)
+            total = {n: total.get(n, 0) + v for n, v in counts.items()}
+            slack += more
+        return total, slack
     cam = scene.camera
     counts = {"primary": cam.width * cam.height * scene.render.spp}
     if any(m.reflectivity > 0 for m in scene.materials.values()) and scene.render.max_depth > 1:
@@ -411,9 +457,11 @@ def expected_rays(scene: Any, refs: dict[str, np.ndarray]) -> tuple[dict[str, in
     ids = refs["aov_id"]
     hit = ids >= 0
     depth = np.where(hit, refs["aov_depth"], 0.0)
-    eye = np.array(cam.eye, dtype=np.float64)
-    # Primary directions through pixel centres (03_camera.h's primary_ray()).
-    forward = np.array(cam.look_at) - eye
+    eye_at, look_at, shift = cam.one_eye() if cam.stereo is not None else (cam.eye, cam.look_at, 0)
+    eye = np.array(eye_at, dtype=np.float64)
+    # Primary directions through pixel centres (03_camera.h's primary_ray()); a stereo eye's
+    # window shifted along right (stereo_eye()).
+    forward = np.array(look_at) - eye
     forward /= np.linalg.norm(forward)
     right = np.cross(forward, np.array(cam.up, dtype=np.float64))
     right /= np.linalg.norm(right)
@@ -422,7 +470,7 @@ def expected_rays(scene: Any, refs: dict[str, np.ndarray]) -> tuple[dict[str, in
     pw = ph * cam.width / cam.height
     i, j = np.meshgrid(np.arange(cam.width) + 0.5, np.arange(cam.height) + 0.5)
     x, y = i / cam.width - 0.5, 0.5 - j / cam.height
-    d = forward + (x * pw)[..., None] * right + (y * ph)[..., None] * up
+    d = forward + (x * pw + shift)[..., None] * right + (y * ph)[..., None] * up
     d /= np.linalg.norm(d, axis=-1, keepdims=True)
     p = eye + depth[..., None] * d
     n = refs["aov_normal"].astype(np.float64)
