@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from lessons.scene_checks import lesson_scenes
 from reference.metrics import compare
 from reports.lesson import build_lesson_page
 from reports.site import markdown_html, write_course_site, write_lesson_site
@@ -133,11 +134,11 @@ def test_course_index_in_a_browser(site, browser):
     assert links == ["L01/index.html", "L04/index.html"]
     for link in links:
         assert (site / link).is_file()
-    # L01 has no scenes yet: its page still has its text, the probes' concepts and mistakes.
+    # L01's page: its text, a metric table per scene, the probes' concepts and the mistakes.
     page, requests, errors = open_page(browser, site / "L01" / "index.html")
     assert_offline_and_whole(page, requests, errors, site)
     text = page.inner_text("main")
-    assert "no scenes yet" in text
+    assert page.locator("table.metrics").count() == len(lesson_scenes("L01")) > 0
     assert "primary rays through pixel centres" in text
     assert page.locator("table.listed tbody tr").count() >= 4
 
