@@ -1,6 +1,6 @@
 """``rtlab lesson list | show Lnn | student Lnn --out DIR [--from PREV] | grade DIR [--public]
-| check [--lesson Lnn] | autograder Lnn --out ZIP``: the verb's work (the parser's entry lives
-in tracer/cli.py with the other verbs)."""
+[--report OUT] | check [--lesson Lnn] | autograder Lnn --out ZIP``: the verb's work (the
+parser's entry lives in tracer/cli.py with the other verbs)."""
 
 from __future__ import annotations
 
@@ -40,6 +40,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--no-scenes", action="store_true", help="probes only: no scene checks (quicker)"
+    )
+    p.add_argument(
+        "--report",
+        metavar="DIR",
+        help="write a feedback page: DIR/index.html beside DIR/results.json and the images of "
+        "the scenes that differ (DIR is replaced whole, only when grading finished)",
     )
     p = sub.add_parser(
         "check",
@@ -98,10 +104,12 @@ def cmd_grade(
     json_path: str | None,
     public: bool = False,
     scenes: bool = True,
+    report: str | None = None,
 ) -> int:
     """Print the diagnosis and the score; write results.json (always, also for an empty or a
-    broken submission) and the heat maps of failing scenes beside it. Exit status 0 whatever
-    the score: grading worked."""
+    broken submission) and the heat maps of failing scenes beside it; with `report`, the
+    feedback page in that directory, beside its own results.json and the scenes' images.
+    Exit status 0 whatever the score: grading worked."""
     from lessons.grader import grade
 
     if lesson is not None:
@@ -109,7 +117,26 @@ def cmd_grade(
     artifacts = Path(json_path).resolve().parent if json_path else None
     if artifacts is not None:
         artifacts.mkdir(parents=True, exist_ok=True)
-    result = grade(Path(submission), lesson, public=public, scenes=scenes, artifacts=artifacts)
+    if report is None:
+        result = grade(Path(submission), lesson, public=public, scenes=scenes,
+                       artifacts=artifacts)  # fmt: skip
+    else:
+        import shlex
+        import shutil
+
+        from reports.feedback import artifact_names, feedback_page
+        from reports.site import staged
+
+        command = "rtlab " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+        with staged(Path(report)) as stage:  # a failed run leaves the old page as it was
+            result = grade(Path(submission), lesson, public=public, scenes=scenes,
+                           artifacts=stage)  # fmt: skip
+            feedback_page(result, stage, command=command)
+        data = result.as_gradescope()
+        if artifacts is not None and artifacts != Path(report).resolve():
+            for name in artifact_names(data):  # the heat maps beside results.json, as ever
+                if (Path(report) / name).is_file():
+                    shutil.copyfile(Path(report) / name, artifacts / name)
     if json_path:
         result.write(json_path)
     print(result.diagnosis)
@@ -121,6 +148,8 @@ def cmd_grade(
         + (f"; wrote {json_path}" if json_path else "")
         + (" (public checks only: the hidden variants count in the final grade)" if public else "")
     )
+    if report is not None:
+        print(f"rtlab: wrote the feedback page {Path(report) / 'index.html'}")
     return 0
 
 
@@ -156,7 +185,12 @@ def run(args: argparse.Namespace) -> int:
             return cmd_show(args.lesson)
         if args.lesson_command == "grade":
             return cmd_grade(
-                args.submission, args.lesson, args.json_path, args.public, not args.no_scenes
+                args.submission,
+                args.lesson,
+                args.json_path,
+                args.public,
+                not args.no_scenes,
+                args.report,
             )
         if args.lesson_command == "check":
             return cmd_check(args.lesson, not args.no_scenes)

@@ -27,6 +27,8 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
 from lessons.catalog import BY_ID, get_lesson
 from lessons.markers import MarkerError, Region, parse
 from lessons.probe import Probe, fmt
@@ -40,8 +42,10 @@ from lessons.sandbox import (
 )
 from lessons.scene_checks import (
     ROOT,
+    PathSceneCheck,
     Rendered,
     SceneCheck,
+    Verdict,
     heat_map_path,
     judge,
     lesson_scenes,
@@ -74,6 +78,21 @@ class TestResult:
     visibility: str
     function: str = ""
     kind: str = "probe"  # probe, not_implemented, compile_error, crash, hang, flood, ...
+    # For the feedback page (reports/feedback.py), in results.json's extra_data: a probe's
+    # inputs and each value expected and got; a failing scene's images beside results.json.
+    inputs: str = ""
+    values: list[dict] = field(default_factory=list)  # label, expected, got, ok
+    artifacts: dict[str, str] = field(default_factory=dict)  # role -> file name
+
+    def extra_data(self) -> dict:
+        extra: dict = {"kind": self.kind, "function": self.function}
+        if self.inputs:
+            extra["inputs"] = self.inputs
+        if self.values:
+            extra["values"] = self.values
+        if self.artifacts:
+            extra["artifacts"] = self.artifacts
+        return extra
 
     def as_gradescope(self, number: str) -> dict:
         return {
@@ -86,6 +105,7 @@ class TestResult:
             "output": self.output,
             "output_format": "md",
             "visibility": self.visibility,
+            "extra_data": self.extra_data(),
         }
 
 
@@ -115,6 +135,12 @@ class Result:
             "visibility": "visible",
             "stdout_visibility": "hidden",
             "tests": [t.as_gradescope(f"{i + 1}") for i, t in enumerate(self.tests)],
+            # For the feedback and class pages (reports/): the diagnosis apart from the notes.
+            "extra_data": {
+                "lessons": self.lessons,
+                "diagnosis": self.diagnosis,
+                "notes": self.notes,
+            },
         }
 
     def write(self, path: str | Path) -> None:
@@ -350,11 +376,12 @@ def _expected_text(e: object) -> str:
 
 def _probe_test(probe: Probe, points: float, kind: str, detail: str) -> TestResult:
     head = f"**Inputs**: {probe.inputs_text}\n\n"
+    values: list[dict] = []
 
     def failed(text: str, why: str) -> TestResult:
         return TestResult(
             probe.name, probe.lesson, probe.concept, 0.0, points, "failed", text,
-            probe.visibility, probe.function, why,
+            probe.visibility, probe.function, why, probe.inputs_text, values,
         )  # fmt: skip
 
     if kind == "result":
@@ -364,6 +391,12 @@ def _probe_test(probe: Probe, points: float, kind: str, detail: str) -> TestResu
             if got is None
             else probe.compare(got)
         )
+        if got is not None and len(got) == len(probe.expected):
+            values = [
+                {"label": lab, "expected": _expected_text(e), "got": fmt(g),
+                 "ok": not any(w.startswith(f"{lab}: ") for w in wrong)}
+                for lab, e, g in zip(probe.labels, probe.expected, got, strict=True)
+            ]  # fmt: skip
         if not wrong:
             return TestResult(
                 probe.name,
@@ -375,6 +408,8 @@ def _probe_test(probe: Probe, points: float, kind: str, detail: str) -> TestResu
                 head + "Passed.",
                 probe.visibility,
                 probe.function,
+                inputs=probe.inputs_text,
+                values=values,
             )
         expected = ", ".join(
             f"{lab} = {_expected_text(e)}"
@@ -544,19 +579,68 @@ def _scene_test(
         return result("failed", f"The grader could not compare this scene: {error!r}.",
                       "grader_error")  # fmt: skip
     lines = [f"- {line}" for line in verdict.lines]
+    files: dict[str, str] = {}
     if artifacts is not None:
         for name, (reference, ours) in verdict.heat_maps.items():
             path = heat_map_path(artifacts, check, name)
             try:
                 heat_map(reference, ours, path)
                 lines.append(f"- heat map of |difference| against {name}: `{path.name}`")
+                files[f"heat:{name}"] = path.name
             except Exception as error:  # a heat map that cannot be written loses only itself
                 lines.append(f"- (no heat map: {error})")
+        try:
+            files.update(_scene_images(check, verdict, refs, artifacts))
+        except Exception as error:  # the images are for the feedback page: lost alone
+            lines.append(f"- (no images: {error})")
+        if any(not k.startswith("heat:") for k in files):
+            named = ", ".join(f"`{f}`" for k, f in files.items() if not k.startswith("heat:"))
+            lines.append(f"- your image, the references' and the failing pixels marked: {named}")
     body = "\n".join(lines)
     if verdict.ok:
         return result("passed", "Passed.\n\n" + body, "scene")
-    return result("failed", f"Your image differs ({check.concept}):\n\n{body}\n\n"
+    test = result("failed", f"Your image differs ({check.concept}):\n\n{body}\n\n"
                   f"Hint: {check.hint}.", "scene")  # fmt: skip
+    test.artifacts = files
+    return test
+
+
+# The failing pixels marked on the student's image: the image darkened and greyed (so the
+# marks stand out on any colour), each pixel over tolerance in magenta.
+MARK_COLOUR = (1.0, 0.0, 1.0)
+
+
+def _scene_images(
+    check: SceneCheck, verdict: Verdict, refs: dict, artifacts: Path
+) -> dict[str, str]:
+    """For a scene that differs, beside results.json: the student's image (`...-yours.png`),
+    each differing reference's (`...-povray-reference.png`) and, for the per-pixel rule, the
+    student's image with the pixels over that reference's tolerance marked
+    (`...-povray-failing.png`). A path scene's rule is statistical, per block: no marks."""
+    from reference.metrics import FLOAT32_SLACK, MITSUBA_TOLERANCE, over_tolerance
+    from tracer.image import save_image
+
+    files: dict[str, str] = {}
+    for name, (reference, ours) in verdict.heat_maps.items():
+        ours = np.asarray(ours, np.float32)[..., :3]
+        if "yours" not in files:
+            path = heat_map_path(artifacts, check, "yours")
+            save_image(path, np.nan_to_num(ours, nan=0.0, posinf=1.0, neginf=0.0))
+            files["yours"] = path.name
+        path = heat_map_path(artifacts, check, f"{name}-reference")
+        save_image(path, np.asarray(reference, np.float32)[..., :3])
+        files[f"reference:{name}"] = path.name
+        if isinstance(check, PathSceneCheck) or name not in ("povray", "mitsuba"):
+            continue
+        tolerance = refs["povray_bound"] + FLOAT32_SLACK if name == "povray" else MITSUBA_TOLERANCE
+        mask = over_tolerance(reference, ours, tolerance)
+        grey = np.nan_to_num(ours, nan=0.0, posinf=1.0, neginf=0.0).mean(-1, keepdims=True)
+        marked = np.repeat(0.25 * np.clip(grey, 0, 1), 3, axis=-1)
+        marked[mask] = MARK_COLOUR
+        path = heat_map_path(artifacts, check, f"{name}-failing")
+        save_image(path, marked)
+        files[f"failing:{name}"] = path.name
+    return files
 
 
 def _compile_text(build: Build) -> str:

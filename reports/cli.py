@@ -1,5 +1,6 @@
-"""``rtlab report lesson Lnn --out DIR | course --out DIR [--single-file] [--mistakes N]``: the
-verb's work (the parser's entry lives in tracer/cli.py with the other verbs)."""
+"""``rtlab report lesson Lnn --out DIR | course --out DIR [--single-file] [--mistakes N] |
+class GRADES --out DIR``: the verb's work (the parser's entry lives in tracer/cli.py with the
+other verbs)."""
 
 from __future__ import annotations
 
@@ -34,13 +35,27 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
             help=f"known-wrong versions built and shown per lesson (default {DEFAULT_MISTAKES};"
             " each costs a build of about 4 s unless cached in build/report-mistakes)",
         )
+    p = sub.add_parser("class", help="an instructor's page over many results.json: OUT/index.html")
+    p.add_argument("grades", help="a directory of results.json files, e.g. grades/<student>/")
+    p.add_argument("--out", required=True, help="the page's directory, e.g. class/")
 
 
 def run(args: argparse.Namespace) -> int:
-    """Exit status: 0 done; 2 bad input (an unknown lesson, a negative --mistakes)."""
+    """Exit status: 0 done; 2 bad input (an unknown lesson, a negative --mistakes, a grades
+    directory without results.json or with one that cannot be read)."""
     from reports.site import write_course_site, write_lesson_site
 
     command = "rtlab " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv[1:] else ""
+    if args.report_command == "class":
+        from reports.classpage import ClassReportError, write_class_page
+
+        try:
+            path = write_class_page(Path(args.grades), Path(args.out), command=command)
+        except ClassReportError as error:
+            print(f"rtlab: error: {error}", file=sys.stderr)
+            return 2
+        print(f"rtlab: wrote {path} and its score histogram")
+        return 0
     if args.mistakes < 0:
         print("rtlab: error: --mistakes: expected 0 or more", file=sys.stderr)
         return 2

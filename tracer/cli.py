@@ -176,6 +176,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
                 f"--against: unknown renderer {name!r}{suggest(name, REFERENCES)}; "
                 f"expected a comma-separated list of {', '.join(REFERENCES)}"
             )
+    if args.html and not args.out_dir:
+        raise UsageError("--html: the page goes beside the images: give --out-dir too")
     scene = _apply_overrides(load_scene(args.scene), args)
     if "povray" in against:
         _classic_only(scene, "POV-Ray")
@@ -191,6 +193,15 @@ def cmd_compare(args: argparse.Namespace) -> int:
         print(f"images and heat maps in {args.out_dir}/")
     if args.json:
         print(f"metrics in {args.json}")
+    if args.html:
+        import shlex
+
+        from reports.compare_page import write_compare_page
+
+        command = "rtlab " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv[1:] else ""
+        page = write_compare_page(scene, rows, args.out_dir, command=command or "rtlab compare",
+                                  json_path=args.json)  # fmt: skip
+        print(f"the page: {page}")
     return _agreement_status(rows)
 
 
@@ -254,6 +265,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--against", default="povray,mitsuba", help="povray, mitsuba or both")
     p.add_argument("--out-dir", help="write each image and a heat map per pair here")
     p.add_argument("--json", help="write the metrics here")
+    p.add_argument(
+        "--html",
+        action="store_true",
+        help="also write the comparison as a page, OUT_DIR/<scene>.html (needs --out-dir)",
+    )
     _add_overrides(p)
     p.set_defaults(func=cmd_compare)
 
