@@ -19,9 +19,7 @@ rt::Camera read_camera(rt::probe::Args &a) {
 } // namespace l01
 
 RT_PROBE(at) {
-    rt::Ray ray;
-    ray.o = a.vec();
-    ray.d = a.vec();
+    rt::Ray ray = a.ray();
     return rt::probe::out(ray.at(a.next()));
 }
 

@@ -14,36 +14,22 @@ rt::Sphere read_sphere(rt::probe::Args &a) {
     return s;
 }
 
-rt::Ray read_ray(rt::probe::Args &a) {
-    rt::Ray ray;
-    ray.o = a.vec();
-    ray.d = a.vec();
-    return ray;
-}
-
-rt::Interval read_range(rt::probe::Args &a) {
-    rt::Interval range;
-    range.min = a.next();
-    range.max = a.next();
-    return range;
-}
-
 } // namespace l02
 
 RT_PROBE(sphere_roots) {
     using rt::probe::out;
     rt::Sphere s = l02::read_sphere(a);
-    rt::SphereRoots r = rt::sphere_roots(s, l02::read_ray(a));
+    rt::SphereRoots r = rt::sphere_roots(s, a.ray());
     return out(r.real) + out(r.t0) + out(r.t1);
 }
 
 RT_PROBE(sphere_case) {
     rt::Sphere s = l02::read_sphere(a);
-    return rt::probe::out(double(int(rt::sphere_case(s, l02::read_ray(a)))));
+    return rt::probe::out(double(int(rt::sphere_case(s, a.ray()))));
 }
 
 RT_PROBE(sphere_t) {
     rt::Sphere s = l02::read_sphere(a);
-    rt::Ray ray = l02::read_ray(a);
-    return rt::probe::out(rt::sphere_t(s, ray, l02::read_range(a)));
+    rt::Ray ray = a.ray();
+    return rt::probe::out(rt::sphere_t(s, ray, a.range()));
 }

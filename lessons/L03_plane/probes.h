@@ -12,27 +12,18 @@ rt::Plane read_plane(rt::probe::Args &a) {
     return pl;
 }
 
-rt::Ray read_ray(rt::probe::Args &a) {
-    rt::Ray ray;
-    ray.o = a.vec();
-    ray.d = a.vec();
-    return ray;
-}
-
 } // namespace l03
 
 RT_PROBE(plane_t) {
     rt::Plane pl = l03::read_plane(a);
-    return rt::probe::out(rt::plane_t(pl, l03::read_ray(a)));
+    return rt::probe::out(rt::plane_t(pl, a.ray()));
 }
 
 RT_PROBE(intersect_plane) {
     using rt::probe::out;
     rt::Plane pl = l03::read_plane(a);
-    rt::Ray ray = l03::read_ray(a);
-    rt::Interval range;
-    range.min = a.next();
-    range.max = a.next();
+    rt::Ray ray = a.ray();
+    rt::Interval range = a.range();
     rt::Hit hit;
     bool found = rt::intersect_plane(pl, ray, range, hit);
     return out(found) + out(hit.t) + out(hit.p) + out(hit.N);

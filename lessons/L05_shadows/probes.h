@@ -124,8 +124,7 @@ RT_PROBE(shadow_ray) {
 RT_PROBE(in_shadow) {
     using rt::probe::out;
     rt::ShadowRay sr;
-    sr.ray.o = a.vec();
-    sr.ray.d = a.vec();
+    sr.ray = a.ray();
     sr.max_t = a.next();
     rt::Scene scene;
     int n = int(a.next());

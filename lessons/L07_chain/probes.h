@@ -80,9 +80,7 @@ RT_PROBE(trace) {
         scene.planes.push_back(pl);
         scene.materials.push_back(m);
     }
-    rt::Ray ray;
-    ray.o = a.vec();
-    ray.d = a.vec();
+    rt::Ray ray = a.ray();
     rt::RayCounts counts;
     rt::Color c = rt::trace(scene, ray, counts);
     return out(c) + out(double(counts.secondary));

@@ -5,30 +5,12 @@
 #include "14_box.h"
 #include "15_triangle.h"
 
-namespace l08 {
-
-rt::Ray read_ray(rt::probe::Args &a) {
-    rt::Ray ray;
-    ray.o = a.vec();
-    ray.d = a.vec();
-    return ray;
-}
-
-rt::Interval read_range(rt::probe::Args &a) {
-    rt::Interval range;
-    range.min = a.next();
-    range.max = a.next();
-    return range;
-}
-
-} // namespace l08
-
 RT_PROBE(slab_interval) {
     using rt::probe::out;
     rt::AABB box;
     box.min = a.vec();
     box.max = a.vec();
-    rt::Slabs s = rt::slab_interval(box, l08::read_ray(a));
+    rt::Slabs s = rt::slab_interval(box, a.ray());
     // "inside" as the box's hit reads it: an overlap that is not empty (a NaN is no overlap).
     return out(s.t_enter <= s.t_leave) + out(s.t_enter) + out(s.t_leave) +
            out(double(s.enter_axis)) + out(double(s.leave_axis));
@@ -41,15 +23,15 @@ RT_PROBE(box_crossing) {
     s.t_leave = a.next();
     s.enter_axis = int(a.next());
     s.leave_axis = int(a.next());
-    rt::BoxCrossing c = rt::box_crossing(s, l08::read_range(a));
+    rt::BoxCrossing c = rt::box_crossing(s, a.range());
     return out(c.found) + out(c.t) + out(double(c.axis)) + out(c.entering);
 }
 
 RT_PROBE(intersect_triangle) {
     using rt::probe::out;
     rt::Vec3 p0 = a.vec(), p1 = a.vec(), p2 = a.vec();
-    rt::Ray ray = l08::read_ray(a);
-    rt::Interval range = l08::read_range(a);
+    rt::Ray ray = a.ray();
+    rt::Interval range = a.range();
     rt::TriangleHit th{rt::infinity, 0, 0, 0};
     bool found = rt::intersect_triangle(p0, p1, p2, rt::WatertightRay(ray), range, th);
     return out(found) + out(th.t) + out(th.b0) + out(th.b1) + out(th.b2);

@@ -4,31 +4,13 @@
 #include "14_box.h"
 #include "16_mesh.h"
 
-namespace l09 {
-
-rt::Ray read_ray(rt::probe::Args &a) {
-    rt::Ray ray;
-    ray.o = a.vec();
-    ray.d = a.vec();
-    return ray;
-}
-
-rt::Interval read_range(rt::probe::Args &a) {
-    rt::Interval range;
-    range.min = a.next();
-    range.max = a.next();
-    return range;
-}
-
-} // namespace l09
-
 RT_PROBE(slab_test) {
     using rt::probe::out;
     rt::AABB box;
     box.min = a.vec();
     box.max = a.vec();
-    rt::SlabRay r(l09::read_ray(a));
-    rt::Interval range = l09::read_range(a);
+    rt::SlabRay r(a.ray());
+    rt::Interval range = a.range();
     double t_near = rt::infinity;
     bool hit = rt::slab_test(box, r, range, t_near);
     return out(hit) + out(t_near);
@@ -47,8 +29,8 @@ RT_PROBE(traverse) {
         mesh.triangles.push_back({3 * i, 3 * i + 1, 3 * i + 2});
     }
     mesh.build();
-    rt::Ray ray = l09::read_ray(a);
-    rt::Interval range = l09::read_range(a);
+    rt::Ray ray = a.ray();
+    rt::Interval range = a.range();
     rt::TriangleHit th{rt::infinity, 0, 0, 0};
     int triangle = -1;
     rt::RayCounts counts;

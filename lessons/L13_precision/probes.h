@@ -31,9 +31,7 @@ RT_PROBE(sphere_roots) {
     rt::Sphere s;
     s.center = a.vec();
     s.radius = a.next();
-    rt::Ray ray;
-    ray.o = a.vec();
-    ray.d = a.vec();
+    rt::Ray ray = a.ray();
     rt::SphereRoots r = rt::sphere_roots(s, ray);
     return out(r.real) + out(r.t0) + out(r.t1);
 }
@@ -42,12 +40,8 @@ RT_PROBE(sphere_t) {
     rt::Sphere s;
     s.center = a.vec();
     s.radius = a.next();
-    rt::Ray ray;
-    ray.o = a.vec();
-    ray.d = a.vec();
-    rt::Interval range;
-    range.min = a.next();
-    range.max = a.next();
+    rt::Ray ray = a.ray();
+    rt::Interval range = a.range();
     return rt::probe::out(rt::sphere_t(s, ray, range));
 }
 #endif

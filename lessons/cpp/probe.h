@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "01_vec3.h"
+#include "02_ray.h"
 #include "07_material.h"
 
 namespace rt::probe {
@@ -23,6 +24,18 @@ struct Args {
     Color color() {
         double r = next(), g = next(), b = next();
         return {r, g, b};
+    }
+    Ray ray() { // origin, then direction
+        Ray r;
+        r.o = vec();
+        r.d = vec();
+        return r;
+    }
+    Interval range() { // min, then max
+        Interval i;
+        i.min = next();
+        i.max = next();
+        return i;
     }
 };
 
