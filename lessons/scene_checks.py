@@ -39,7 +39,7 @@ import numpy as np
 import numpy.typing as npt
 
 from lessons.catalog import get_lesson
-from lessons.probe import HIDDEN
+from lessons.probe import HIDDEN, Vec
 from lessons.sandbox import Build, Limits, run_limited
 
 HERE = Path(__file__).resolve().parent
@@ -63,6 +63,25 @@ REFERENCE_WIDTH = 160
 # A child renders every scene of a check in a few tenths of a second; a student's loop that
 # never ends is stopped after 20 s of CPU; 4 GiB of address space as render_in_child argues.
 RENDER_LIMITS = Limits(cpu_s=20, wall_s=60.0, memory_bytes=4 << 30)
+
+
+# Vector arithmetic in double for the closed forms of the lessons' scene modules
+# (lessons/Lnn_name/scenes/__init__.py): their tolerances argue from double precision.
+def sub(a: Vec, b: Vec) -> Vec:
+    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
+
+
+def dot(a: Vec, b: Vec) -> float:
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def cross(a: Vec, b: Vec) -> Vec:
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+def unit(a: Vec) -> Vec:
+    n = math.sqrt(dot(a, a))
+    return (a[0] / n, a[1] / n, a[2] / n)
 
 
 @dataclass(frozen=True)

@@ -8,50 +8,31 @@ lecture's formulas (slide "Perspective Ray Tracing"), never from the tracer."""
 
 import math
 
-from lessons.probe import HIDDEN
-from lessons.scene_checks import Analytic, SceneCheck
-
-Vec = tuple[float, float, float]
-
-
-def _sub(a: Vec, b: Vec) -> Vec:
-    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
-
-
-def _dot(a: Vec, b: Vec) -> float:
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-def _unit(a: Vec) -> Vec:
-    n = math.sqrt(_dot(a, a))
-    return (a[0] / n, a[1] / n, a[2] / n)
-
-
-def _cross(a: Vec, b: Vec) -> Vec:
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+from lessons.probe import HIDDEN, Vec
+from lessons.scene_checks import Analytic, SceneCheck, cross, dot, sub, unit
 
 
 def ray(eye: Vec, look_at: Vec, up: Vec, fov_y: float, width: int, height: int, i: int,
         j: int) -> Vec:  # fmt: skip
     """The unit direction through the centre of pixel (i, j), row 0 at the top: forward +
     x w right + y h up, x = (i + 1/2) / width - 1/2, y = 1/2 - (j + 1/2) / height."""
-    forward = _unit(_sub(look_at, eye))
-    right = _unit(_cross(forward, up))
-    true_up = _cross(right, forward)
+    forward = unit(sub(look_at, eye))
+    right = unit(cross(forward, up))
+    true_up = cross(right, forward)
     h = 2 * math.tan(math.radians(fov_y) / 2)
     w = h * width / height
     x = (i + 0.5) / width - 0.5
     y = 0.5 - (j + 0.5) / height
-    return _unit(
+    return unit(
         tuple(f + x * w * r + y * h * u for f, r, u in zip(forward, right, true_up, strict=True))
     )  # type: ignore[return-value]
 
 
 def sphere_t(o: Vec, d: Vec, centre: Vec, radius: float) -> float:
     """The nearer root of |o + t d - c|^2 = r^2 for a unit d."""
-    f = _sub(o, centre)
-    b = _dot(f, d)
-    disc = b * b - (_dot(f, f) - radius * radius)
+    f = sub(o, centre)
+    b = dot(f, d)
+    disc = b * b - (dot(f, f) - radius * radius)
     assert disc > 0, "the ray misses the sphere"
     return -b - math.sqrt(disc)
 
@@ -75,7 +56,7 @@ AXIS = ((0.0, 0.0, 4.0), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0), 40.0, 81, 61)
 AXIS_D = ray(*AXIS, 50, 22)
 AXIS_T = sphere_t(AXIS[0], AXIS_D, (0.0, 0.0, 0.0), 1.0)
 AXIS_P: Vec = tuple(o + AXIS_T * d for o, d in zip(AXIS[0], AXIS_D, strict=True))  # type: ignore[assignment]
-AXIS_NL = _dot(AXIS_P, _unit(_sub((0.0, 0.0, 6.0), AXIS_P)))
+AXIS_NL = dot(AXIS_P, unit(sub((0.0, 0.0, 6.0), AXIS_P)))
 AXIS_COLOR = tuple(0.1 * c + 0.8 * AXIS_NL * c for c in (0.9, 0.85, 0.8))
 
 # float32 output: half an ulp of a value below 8 is 4.8e-7 (of the background's 0.1, 3.7e-9);

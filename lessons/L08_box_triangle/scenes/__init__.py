@@ -9,27 +9,8 @@ test and the plane of a triangle, written out below), never from the tracer."""
 
 import math
 
-from lessons.probe import HIDDEN
-from lessons.scene_checks import Analytic, SceneCheck
-
-Vec = tuple[float, float, float]
-
-
-def _sub(a: Vec, b: Vec) -> Vec:
-    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
-
-
-def _dot(a: Vec, b: Vec) -> float:
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-def _cross(a: Vec, b: Vec) -> Vec:
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
-
-
-def _unit(a: Vec) -> Vec:
-    n = math.sqrt(_dot(a, a))
-    return (a[0] / n, a[1] / n, a[2] / n)
+from lessons.probe import HIDDEN, Vec
+from lessons.scene_checks import Analytic, SceneCheck, cross, sub, unit
 
 
 def box_entry(o: Vec, d: Vec, lo: Vec, hi: Vec) -> tuple[float, Vec]:
@@ -48,13 +29,13 @@ def box_entry(o: Vec, d: Vec, lo: Vec, hi: Vec) -> tuple[float, Vec]:
 
 # box_corner: the centre ray, eye to look_at, enters the red box through its front face.
 CORNER_EYE: Vec = (-2.2, 2.0, 3.0)
-CORNER_D = _unit(_sub((0.0, 0.2, 0.0), CORNER_EYE))
+CORNER_D = unit(sub((0.0, 0.2, 0.0), CORNER_EYE))
 CORNER_T, CORNER_N = box_entry(CORNER_EYE, CORNER_D, (-0.6, 0.0, -0.5), (0.7, 0.9, 0.6))
 
 # triangle_normal: the centre ray (0, 0, 4) - t z meets the triangle's plane n.(p - p0) = 0.
 P0: Vec = (-3.0, -2.0, -1.0)
-TRI_NG = _cross(_sub((3.0, -2.0, 0.5), P0), _sub((0.0, 3.0, -0.5), P0))  # (-7.5, 1.5, 30)
-TRI_N = _unit(TRI_NG)
+TRI_NG = cross(sub((3.0, -2.0, 0.5), P0), sub((0.0, 3.0, -0.5), P0))  # (-7.5, 1.5, 30)
+TRI_N = unit(TRI_NG)
 TRI_T = 4.0 - P0[2] - (TRI_NG[0] * P0[0] + TRI_NG[1] * P0[1]) / TRI_NG[2]
 
 # float32 output: half an ulp of a value below 8 is 4.8e-7, of a unit normal's components

@@ -13,27 +13,9 @@ import tomllib
 from pathlib import Path
 
 from lessons.probe import HIDDEN
-from lessons.scene_checks import Analytic, SceneCheck
+from lessons.scene_checks import Analytic, SceneCheck, cross, dot, sub, unit
 
 HERE = Path(__file__).resolve().parent
-Vec = tuple[float, float, float]
-
-
-def _sub(a: Vec, b: Vec) -> Vec:
-    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
-
-
-def _dot(a: Vec, b: Vec) -> float:
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-def _cross(a: Vec, b: Vec) -> Vec:
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
-
-
-def _unit(a: Vec) -> Vec:
-    n = math.sqrt(_dot(a, a))
-    return (a[0] / n, a[1] / n, a[2] / n)
 
 
 def closest_mesh_hit(name: str, i: int, j: int) -> float:
@@ -42,28 +24,28 @@ def closest_mesh_hit(name: str, i: int, j: int) -> float:
     scene = tomllib.loads((HERE / f"{name}.toml").read_text())
     cam = scene["camera"]
     eye, look_at = tuple(cam["eye"]), tuple(cam["look_at"])
-    forward = _unit(_sub(look_at, eye))
-    right = _unit(_cross(forward, (0.0, 1.0, 0.0)))
-    up = _cross(right, forward)
+    forward = unit(sub(look_at, eye))
+    right = unit(cross(forward, (0.0, 1.0, 0.0)))
+    up = cross(right, forward)
     h = 2 * math.tan(math.radians(cam["fov_y"]) / 2)
     w = h * cam["width"] / cam["height"]
     x, y = (i + 0.5) / cam["width"] - 0.5, 0.5 - (j + 0.5) / cam["height"]
-    d = _unit(tuple(f + x * w * r + y * h * u for f, r, u in zip(forward, right, up, strict=True)))  # type: ignore[arg-type]
+    d = unit(tuple(f + x * w * r + y * h * u for f, r, u in zip(forward, right, up, strict=True)))  # type: ignore[arg-type]
     mesh = next(o for o in scene["objects"] if o["type"] == "mesh")
     vs = [tuple(v) for v in mesh["vertices"]]
     best = math.inf
     for f in mesh["faces"]:
         p0, p1, p2 = (vs[k] for k in f)
-        e1, e2 = _sub(p1, p0), _sub(p2, p0)
-        q = _cross(d, e2)
-        det = _dot(e1, q)
+        e1, e2 = sub(p1, p0), sub(p2, p0)
+        q = cross(d, e2)
+        det = dot(e1, q)
         if det == 0:
             continue
-        s = _sub(eye, p0)
-        b1 = _dot(s, q) / det
-        r = _cross(s, e1)
-        b2 = _dot(d, r) / det
-        t = _dot(e2, r) / det
+        s = sub(eye, p0)
+        b1 = dot(s, q) / det
+        r = cross(s, e1)
+        b2 = dot(d, r) / det
+        t = dot(e2, r) / det
         if b1 >= 0 and b2 >= 0 and b1 + b2 <= 1 and 0 < t < best:
             best = t
     return best

@@ -18,10 +18,9 @@ named a wrong weight (rtlab lesson check L10 caught that)."""
 
 import math
 
-from lessons.probe import HIDDEN
-from lessons.scene_checks import Analytic, SceneCheck
+from lessons.probe import HIDDEN, Vec
+from lessons.scene_checks import Analytic, SceneCheck, cross, dot, sub, unit
 
-Vec = tuple[float, float, float]
 PHI = (1 + math.sqrt(5)) / 2
 VERTICES: list[Vec] = [
     (-1, PHI, 0), (1, PHI, 0), (-1, -PHI, 0), (1, -PHI, 0), (0, -1, PHI), (0, 1, PHI),
@@ -34,33 +33,16 @@ FACES = [
 ]  # fmt: skip
 
 
-def _sub(a: Vec, b: Vec) -> Vec:
-    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
-
-
-def _dot(a: Vec, b: Vec) -> float:
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-def _cross(a: Vec, b: Vec) -> Vec:
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
-
-
-def _unit(a: Vec) -> Vec:
-    n = math.sqrt(_dot(a, a))
-    return (a[0] / n, a[1] / n, a[2] / n)
-
-
 def ray(eye: Vec, look_at: Vec, up: Vec, fov_y: float, width: int, height: int, i: int,
         j: int) -> Vec:  # fmt: skip
     """The unit direction through the centre of pixel (i, j) (slide "Perspective Ray Tracing")."""
-    forward = _unit(_sub(look_at, eye))
-    right = _unit(_cross(forward, up))
-    true_up = _cross(right, forward)
+    forward = unit(sub(look_at, eye))
+    right = unit(cross(forward, up))
+    true_up = cross(right, forward)
     h = 2 * math.tan(math.radians(fov_y) / 2)
     w = h * width / height
     x, y = (i + 0.5) / width - 0.5, 0.5 - (j + 0.5) / height
-    return _unit(
+    return unit(
         tuple(f + x * w * r + y * h * u for f, r, u in zip(forward, right, true_up, strict=True))
     )  # type: ignore[return-value]
 
@@ -71,21 +53,21 @@ def smooth_normal(o: Vec, d: Vec) -> tuple[float, Vec, Vec]:
     best: tuple[float, Vec, Vec] | None = None
     for f in FACES:
         p0, p1, p2 = (VERTICES[k] for k in f)
-        e1, e2 = _sub(p1, p0), _sub(p2, p0)
-        q = _cross(d, e2)
-        det = _dot(e1, q)
-        s = _sub(o, p0)
-        b1 = _dot(s, q) / det
-        r = _cross(s, e1)
-        b2 = _dot(d, r) / det
-        t = _dot(e2, r) / det
+        e1, e2 = sub(p1, p0), sub(p2, p0)
+        q = cross(d, e2)
+        det = dot(e1, q)
+        s = sub(o, p0)
+        b1 = dot(s, q) / det
+        r = cross(s, e1)
+        b2 = dot(d, r) / det
+        t = dot(e2, r) / det
         if b1 < 0 or b2 < 0 or b1 + b2 > 1 or t <= 0 or (best and t >= best[0]):
             continue
-        n0, n1, n2 = (_unit(VERTICES[k]) for k in f)
+        n0, n1, n2 = (unit(VERTICES[k]) for k in f)
         blend = tuple(
             (1 - b1 - b2) * a + b1 * b + b2 * c for a, b, c in zip(n0, n1, n2, strict=True)
         )
-        best = (t, _unit(blend), _unit(_cross(e1, e2)))  # type: ignore[arg-type]
+        best = (t, unit(blend), unit(cross(e1, e2)))  # type: ignore[arg-type]
     assert best is not None, "the ray misses the icosahedron"
     return best
 
