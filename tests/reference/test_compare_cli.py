@@ -112,10 +112,9 @@ def test_compare_writes_images_heat_maps_and_json(tmp_path, capsys):
     assert {"shadows-rtlab.exr", "shadows-povray.png", "shadows-diff-mitsuba-llvm.png"} <= names
 
 
-def test_compare_exits_1_when_the_renderers_disagree(tmp_path, capsys, monkeypatch):
-    """A converter bug (the picture mirrored: ``right x`` for ``right -x``) injected into the
-    SDL that `rtlab compare` hands POV-Ray: the real POV-Ray renders it, the rule rejects it,
-    and the exit status says so."""
+def mirror_the_povray_converter(monkeypatch) -> None:
+    """A converter bug (the picture mirrored: ``right x`` for ``right -x``) in the SDL that
+    compare and demo hand POV-Ray, checked to be injected."""
     import converters.povray
 
     def mirrored(scene, path):
@@ -126,6 +125,13 @@ def test_compare_exits_1_when_the_renderers_disagree(tmp_path, capsys, monkeypat
         return Path(path)
 
     monkeypatch.setattr("reference.povray.write_povray", mirrored)
+
+
+def test_compare_exits_1_when_the_renderers_disagree(tmp_path, capsys, monkeypatch):
+    """A converter bug (the picture mirrored: ``right x`` for ``right -x``) injected into the
+    SDL that `rtlab compare` hands POV-Ray: the real POV-Ray renders it, the rule rejects it,
+    and the exit status says so."""
+    mirror_the_povray_converter(monkeypatch)
     js = tmp_path / "m.json"
     args = ["compare", str(SHADOWS), "--against", "povray", "--json", str(js),
             "--width", "80", "--height", "60", "--quiet"]  # fmt: skip
@@ -145,16 +151,7 @@ def test_compare_exits_1_when_the_renderers_disagree(tmp_path, capsys, monkeypat
 def test_demo_exits_1_when_the_renderers_disagree(tmp_path, capsys, monkeypatch):
     """`make demo` is a newcomer's first proof that the renderers agree: with the same mirrored
     converter injected, `rtlab demo` must say so in its exit status, as compare does."""
-    import converters.povray
-
-    def mirrored(scene, path):
-        sdl = converters.povray.to_povray(scene)
-        wrong = sdl.replace("right -x*", "right x*")
-        assert wrong != sdl, "the bug was not injected"
-        Path(path).write_text(wrong)
-        return Path(path)
-
-    monkeypatch.setattr("reference.povray.write_povray", mirrored)
+    mirror_the_povray_converter(monkeypatch)
     args = ["demo", "--out-dir", str(tmp_path), "--width", "96", "--height", "48", "--quiet"]
     assert main(args) == 1
     assert "rtlab: povray disagrees with rtlab:" in capsys.readouterr().err
