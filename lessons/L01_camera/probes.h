@@ -2,22 +2,6 @@
 // frame (initialize()) and a primary ray through an image-plane point (primary_ray()).
 #include "03_camera.h"
 
-namespace l01 {
-
-// A camera as the scene gives it: eye, look_at, up, fov_y (degrees), width, height.
-rt::Camera read_camera(rt::probe::Args &a) {
-    rt::Camera cam;
-    cam.eye = a.vec();
-    cam.look_at = a.vec();
-    cam.up = a.vec();
-    cam.fov_y = a.next();
-    cam.width = int(a.next());
-    cam.height = int(a.next());
-    return cam;
-}
-
-} // namespace l01
-
 RT_PROBE(at) {
     rt::Ray ray = a.ray();
     return rt::probe::out(ray.at(a.next()));
@@ -25,7 +9,7 @@ RT_PROBE(at) {
 
 RT_PROBE(initialize) {
     using rt::probe::out;
-    rt::Camera cam = l01::read_camera(a);
+    rt::Camera cam = a.camera();
     cam.initialize();
     return out(cam.forward) + out(cam.right) + out(cam.true_up) + out(cam.plane_height) +
            out(cam.plane_width);

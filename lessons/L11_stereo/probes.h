@@ -14,13 +14,7 @@
 namespace l11 {
 
 rt::Camera read_centre(rt::probe::Args &a) {
-    rt::Camera cam;
-    cam.eye = a.vec();
-    cam.look_at = a.vec();
-    cam.up = a.vec();
-    cam.fov_y = a.next();
-    cam.width = int(a.next());
-    cam.height = int(a.next());
+    rt::Camera cam = a.camera();
     cam.initialize();
     return cam;
 }

@@ -9,6 +9,7 @@
 
 #include "01_vec3.h"
 #include "02_ray.h"
+#include "03_camera.h"
 #include "07_material.h"
 
 namespace rt::probe {
@@ -36,6 +37,16 @@ struct Args {
         i.min = next();
         i.max = next();
         return i;
+    }
+    Camera camera() { // as the scene gives it: eye, look_at, up, fov_y (degrees), width, height
+        Camera cam;
+        cam.eye = vec();
+        cam.look_at = vec();
+        cam.up = vec();
+        cam.fov_y = next();
+        cam.width = int(next());
+        cam.height = int(next());
+        return cam;
     }
 };
 
