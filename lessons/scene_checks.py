@@ -66,7 +66,7 @@ RENDER_LIMITS = Limits(cpu_s=20, wall_s=60.0, memory_bytes=4 << 30)
 
 
 # Vector arithmetic in double for the closed forms of the lessons' scene modules
-# (lessons/Lnn_name/scenes/__init__.py): their tolerances argue from double precision.
+# (each lesson folder's scenes/__init__.py): their tolerances argue from double precision.
 def sub(a: Vec, b: Vec) -> Vec:
     return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
 
