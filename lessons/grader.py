@@ -615,8 +615,9 @@ def _scene_images(
 ) -> dict[str, str]:
     """For a scene that differs, beside results.json: the student's image (`...-yours.png`),
     each differing reference's (`...-povray-reference.png`) and, for the per-pixel rule, the
-    student's image with the pixels over that reference's tolerance marked
-    (`...-povray-failing.png`). A path scene's rule is statistical, per block: no marks."""
+    student's image with the pixels that fail against that reference marked
+    (`...-povray-failing.png`): those over its tolerance for the per-pixel rule, a path
+    scene's failing blocks (its rule is statistical, per block) otherwise."""
     from reference.metrics import FLOAT32_SLACK, MITSUBA_TOLERANCE, over_tolerance
     from tracer.image import save_image
 
@@ -630,10 +631,13 @@ def _scene_images(
         path = heat_map_path(artifacts, check, f"{name}-reference")
         save_image(path, np.asarray(reference, np.float32)[..., :3])
         files[f"reference:{name}"] = path.name
-        if isinstance(check, PathSceneCheck) or name not in ("povray", "mitsuba"):
+        if name in verdict.failing:
+            mask = verdict.failing[name]
+        elif isinstance(check, PathSceneCheck) or name not in ("povray", "mitsuba"):
             continue
-        tolerance = refs["povray_bound"] + FLOAT32_SLACK if name == "povray" else MITSUBA_TOLERANCE
-        mask = over_tolerance(reference, ours, tolerance)
+        else:
+            bound = refs["povray_bound"] + FLOAT32_SLACK if name == "povray" else MITSUBA_TOLERANCE
+            mask = over_tolerance(reference, ours, bound)
         grey = np.nan_to_num(ours, nan=0.0, posinf=1.0, neginf=0.0).mean(-1, keepdims=True)
         marked = np.repeat(0.25 * np.clip(grey, 0, 1), 3, axis=-1)
         marked[mask] = MARK_COLOUR

@@ -375,6 +375,9 @@ class Verdict:
     ok: bool
     lines: list[str]  # Markdown bullet lines, each one comparison
     heat_maps: dict[str, tuple[np.ndarray, np.ndarray]]  # name -> (reference, student image)
+    # name -> the pixels that fail, where the check's rule is not per pixel (a path scene's
+    # blocks); a per-pixel rule's failing pixels are those over its tolerance (the grader's).
+    failing: dict[str, np.ndarray] = field(default_factory=dict)
 
 
 def share_bound(width: int) -> float:
@@ -676,9 +679,10 @@ def _statistical(
     mean: np.ndarray,
     variance: np.ndarray,
     ref_spp: int,
-) -> tuple[bool, str]:
+) -> tuple[bool, str, np.ndarray | None]:
     """The aggregate test (and, against a noisy reference, the per-pixel z-test of the
-    replicates' mean) of one path scene, and where it fails."""
+    replicates' mean) of one path scene, and where it fails: the line, and the mask of the
+    failing blocks (None when it passes)."""
     from reference.stats import Reference, aggregate_test, pixel_test
 
     ref = Reference(mean, variance, ref_spp)
@@ -701,18 +705,19 @@ def _statistical(
         text += f"; {100 * pix.statistic:.4g}% of the pixels pass the z-test (at least 99.75%)"
         ok &= pix.passed
     if ok:
-        return True, f"against {name}: agrees in the statistical sense ({text})"
+        return True, f"against {name}: agrees in the statistical sense ({text})", None
     mask = _failing_blocks(images, mean, variance / ref_spp, check.block, check.alpha)
     if not mask.any():  # a bias spread over the whole image: every block a little
         mask = np.ones(mean.shape[:2], dtype=bool)
     diff = np.abs(ours - mean).max(-1)
     diff = np.where(mask, np.where(np.isfinite(diff), diff, np.inf), -1)
     y, x = np.unravel_index(int(np.argmax(diff)), diff.shape)
-    return False, (
+    line = (
         f"against {name}: **differs**: {text}; failing pixels in {_where(mask)}; "
         f"worst pixel ({x}, {y}): expected {_rgb(mean[y, x])}, got {_rgb(ours[y, x])} "
         f"(the mean of {len(images)} renders of {spp} samples)"
     )
+    return False, line, mask
 
 
 def judge_path(check: PathSceneCheck, rendered: Rendered, refs: dict[str, np.ndarray]) -> Verdict:
@@ -722,26 +727,28 @@ def judge_path(check: PathSceneCheck, rendered: Rendered, refs: dict[str, np.nda
     images = [np.asarray(im, np.float64)[..., :3] for im in rendered.image]
     spp = check.load().render.spp
     ours = np.mean(images, axis=0).astype(np.float32)
-    lines, heat, ok = [], {}, True
+    lines, heat, failing, ok = [], {}, {}, True
     if "mitsuba" in check.references:
         mean = refs["path_mean"]
-        good, text = _statistical(
+        good, text, mask = _statistical(
             "Mitsuba's path tracer", check, images, spp, mean, refs["path_variance"],
             int(refs["path_spp"]),
         )  # fmt: skip
         if not good:
             heat["mitsuba"] = (mean.astype(np.float32), ours)
+            failing["mitsuba"] = mask
         ok &= good
         lines.append(text)
     if check.closed_form is not None:
         value, why = check.closed_form
         exact = np.broadcast_to(np.asarray(value, np.float64), images[0].shape)
-        good, text = _statistical(
+        good, text, mask = _statistical(
             "the closed form", check, images, spp, exact, np.zeros_like(exact), 1
         )  # no reference noise: variance 0
         text = text.replace("against the closed form", f"against the closed form ({why})")
         if not good and "mitsuba" not in heat:
             heat["closed_form"] = (exact.astype(np.float32), ours)
+            failing["closed_form"] = mask
         ok &= good
         lines.append(text)
-    return Verdict(ok, lines, heat)
+    return Verdict(ok, lines, heat, failing)
