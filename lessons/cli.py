@@ -47,6 +47,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="write a feedback page: DIR/index.html beside DIR/results.json and the images of "
         "the scenes that differ (DIR is replaced whole, only when grading finished)",
     )
+    p.add_argument(
+        "--single-file",
+        action="store_true",
+        help="with --report: the page's images inlined as data: URIs (one file to mail)",
+    )
     p = sub.add_parser(
         "check",
         help="instructor: markers, stub trees, solution and known-wrong versions of every lesson",
@@ -105,6 +110,7 @@ def cmd_grade(
     public: bool = False,
     scenes: bool = True,
     report: str | None = None,
+    single_file: bool = False,
 ) -> int:
     """Print the diagnosis and the score; write results.json (always, also for an empty or a
     broken submission) and the heat maps of failing scenes beside it; with `report`, the
@@ -131,7 +137,7 @@ def cmd_grade(
         with staged(Path(report)) as stage:  # a failed run leaves the old page as it was
             result = grade(Path(submission), lesson, public=public, scenes=scenes,
                            artifacts=stage)  # fmt: skip
-            feedback_page(result, stage, command=command)
+            feedback_page(result, stage, command=command, inline=single_file)
         data = result.as_gradescope()
         if artifacts is not None and artifacts != Path(report).resolve():
             for name in artifact_names(data):  # the heat maps beside results.json, as ever
@@ -184,6 +190,10 @@ def run(args: argparse.Namespace) -> int:
         if args.lesson_command == "show":
             return cmd_show(args.lesson)
         if args.lesson_command == "grade":
+            if args.single_file and args.report is None:
+                print("rtlab: error: --single-file inlines the feedback page's images: "
+                      "give --report DIR too", file=sys.stderr)  # fmt: skip
+                return 2
             return cmd_grade(
                 args.submission,
                 args.lesson,
@@ -191,6 +201,7 @@ def run(args: argparse.Namespace) -> int:
                 args.public,
                 not args.no_scenes,
                 args.report,
+                args.single_file,
             )
         if args.lesson_command == "check":
             return cmd_check(args.lesson, not args.no_scenes)

@@ -140,8 +140,11 @@ def histogram(students: list[Student], path: Path) -> list[int]:
     return [int(c) for c in counts]
 
 
-def render_class(students: list[Student], directory: Path, *, command: str = "") -> Path:
-    from reports.site import environment
+def render_class(students: list[Student], directory: Path, *, command: str = "",
+                 inline: bool = False) -> Path:  # fmt: skip
+    """``inline``: scores.png inlined as a data: URI and not kept (a page to mail; its links
+    to the feedback pages still need those pages where the links say)."""
+    from reports.site import environment, inline_images
 
     cols = columns(students)
     counts = histogram(students, directory / "scores.png")
@@ -163,16 +166,21 @@ def render_class(students: list[Student], directory: Path, *, command: str = "")
         command=command,
         made=time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
     )
+    if inline:
+        html, used = inline_images(html, directory)
+        for path in used:
+            path.unlink()
     (directory / "index.html").write_text(html)
     return directory / "index.html"
 
 
-def write_class_page(grades: str | Path, out: str | Path, *, command: str = "") -> Path:
+def write_class_page(grades: str | Path, out: str | Path, *, command: str = "",
+                     inline: bool = False) -> Path:  # fmt: skip
     """``out/index.html`` and ``out/scores.png`` over ``grades``; ``out`` replaced whole."""
     from reports.site import staged
 
     out = Path(out)
     students = read_class(Path(grades), out)  # bad input found before anything is written
     with staged(out) as stage:
-        render_class(students, stage, command=command)
+        render_class(students, stage, command=command, inline=inline)
     return out / "index.html"

@@ -1,6 +1,6 @@
 """``rtlab report lesson Lnn --out DIR | course --out DIR [--single-file] [--mistakes N] |
-class GRADES --out DIR``: the verb's work (the parser's entry lives in tracer/cli.py with the
-other verbs)."""
+class GRADES --out DIR [--single-file]``: the verb's work (the parser's entry lives in
+tracer/cli.py with the other verbs)."""
 
 from __future__ import annotations
 
@@ -38,6 +38,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     p = sub.add_parser("class", help="an instructor's page over many results.json: OUT/index.html")
     p.add_argument("grades", help="a directory of results.json files, e.g. grades/<student>/")
     p.add_argument("--out", required=True, help="the page's directory, e.g. class/")
+    p.add_argument(
+        "--single-file",
+        action="store_true",
+        help="inline the score histogram as a data: URI (a page to mail), no image file",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -50,7 +55,8 @@ def run(args: argparse.Namespace) -> int:
         from reports.classpage import ClassReportError, write_class_page
 
         try:
-            path = write_class_page(Path(args.grades), Path(args.out), command=command)
+            path = write_class_page(Path(args.grades), Path(args.out), command=command,
+                                    inline=args.single_file)  # fmt: skip
         except ClassReportError as error:
             print(f"rtlab: error: {error}", file=sys.stderr)
             return 2

@@ -75,7 +75,11 @@ def compare_blocks(scene: Any, rows: list[dict[str, Any]], out: Path) -> list[di
 
 
 def write_compare_page(scene: Any, rows: list[dict[str, Any]], out_dir: str | Path, *,
-                       command: str = "", json_path: str | Path | None = None) -> Path:  # fmt: skip
+                       command: str = "", json_path: str | Path | None = None,
+                       inline: bool = False) -> Path:  # fmt: skip
+    """``out_dir/<scene>.html`` over the images compare wrote there; ``inline``
+    (``--single-file``): the images inlined as data: URIs (the files stay: they are compare's
+    outputs)."""
     from reports.site import SCALE, environment
     from tracer.image import atomic_path
 
@@ -107,6 +111,10 @@ def write_compare_page(scene: Any, rows: list[dict[str, Any]], out_dir: str | Pa
         threads=next((r.get("threads") for r in rows if r["renderer"] == "rtlab"), "all"),
         made=time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
     )
+    if inline:
+        from reports.site import inline_images
+
+        html, _ = inline_images(html, out)
     path = out / f"{stem}.html"
     with atomic_path(path) as tmp:
         tmp.write_text(html)

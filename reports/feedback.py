@@ -262,12 +262,15 @@ def feedback_page(
     artifacts: str | Path | None = None,
     title: str = "",
     command: str = "",
+    inline: bool = False,
 ) -> Path:
     """Write ``out/index.html`` for one graded submission: ``result`` a lessons.grader.Result,
     results.json's dict, or the path of a results.json. The grader's images are read from
     ``artifacts`` (default: ``out``, where `rtlab lesson grade --report` has the grader write
     them) and copied into ``out`` when elsewhere; a Result or a dict is also written as
-    ``out/results.json``, so the page sits beside its results. Each file atomically."""
+    ``out/results.json``, so the page sits beside its results. Each file atomically.
+    ``inline`` (``--single-file``): the images inlined into the page as data: URIs, a page to
+    mail; the image files stay beside results.json, which names them."""
     from tracer.image import atomic_path
 
     out = Path(out)
@@ -290,6 +293,10 @@ def feedback_page(
         with atomic_path(beside) as tmp:
             tmp.write_text(json.dumps(data, indent=2) + "\n")
     page = feedback_html(data, title=title, command=command, images=present)
+    if inline:
+        from reports.site import inline_images
+
+        page, _ = inline_images(page, out)
     with atomic_path(out / "index.html") as tmp:
         tmp.write_text(page)
     return out / "index.html"

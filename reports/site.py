@@ -133,6 +133,36 @@ class Assets:
         return self._src(path)
 
 
+# An image's source in our templates: <img ... src="NAME" ...>, NAME a file beside the page.
+IMG_SRC = re.compile(r'(<img\b[^>]*?\bsrc=")([^"]+)(")')
+MIME = {".png": "image/png", ".jpg": "image/jpeg", ".jpeg": "image/jpeg", ".svg": "image/svg+xml"}
+
+
+def inline_images(html: str, directory: Path) -> tuple[str, set[Path]]:
+    """``--single-file``: every <img> whose source is a file under ``directory`` becomes a
+    data: URI, so the page stands alone (to mail, to attach); returns the page and the files
+    read (the caller removes those that exist only for the page). A source that is already a
+    data: URI, or names no file there, is left as it is (the browser tests find the latter)."""
+    import html as htmllib
+
+    directory = Path(directory).resolve()
+    used: set[Path] = set()
+
+    def replace(match: re.Match[str]) -> str:
+        src = htmllib.unescape(match.group(2))
+        path = (directory / src).resolve()
+        if src.startswith("data:") or "://" in src or not path.is_file():
+            return match.group(0)
+        if not path.is_relative_to(directory):
+            return match.group(0)
+        used.add(path)
+        mime = MIME.get(path.suffix.lower(), "application/octet-stream")
+        data = base64.b64encode(path.read_bytes()).decode("ascii")
+        return f"{match.group(1)}data:{mime};base64,{data}{match.group(3)}"
+
+    return IMG_SRC.sub(replace, html), used
+
+
 def _jsonable(value: Any) -> Any:
     from reference.compare import _jsonable as plain
 

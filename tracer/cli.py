@@ -178,6 +178,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
             )
     if args.html and not args.out_dir:
         raise UsageError("--html: the page goes beside the images: give --out-dir too")
+    if args.single_file and not args.html:
+        raise UsageError("--single-file: it inlines the page's images: give --html too")
     scene = _apply_overrides(load_scene(args.scene), args)
     if "povray" in against:
         _classic_only(scene, "POV-Ray")
@@ -200,7 +202,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
 
         command = "rtlab " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv[1:] else ""
         page = write_compare_page(scene, rows, args.out_dir, command=command or "rtlab compare",
-                                  json_path=args.json)  # fmt: skip
+                                  json_path=args.json, inline=args.single_file)  # fmt: skip
         print(f"the page: {page}")
     return _agreement_status(rows)
 
@@ -269,6 +271,11 @@ def build_parser() -> argparse.ArgumentParser:
         "--html",
         action="store_true",
         help="also write the comparison as a page, OUT_DIR/<scene>.html (needs --out-dir)",
+    )
+    p.add_argument(
+        "--single-file",
+        action="store_true",
+        help="with --html: the page's images inlined as data: URIs (one file to mail)",
     )
     _add_overrides(p)
     p.set_defaults(func=cmd_compare)

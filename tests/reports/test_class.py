@@ -12,7 +12,14 @@ import pytest
 
 from lessons.mistakes import mistakes, write_mistake
 from lessons.student import CORE
-from tests.reports.test_pages import ROOT, assert_offline_and_whole, browser, open_page
+from tests.reports.test_pages import (
+    ROOT,
+    assert_offline_and_whole,
+    assert_reads_on_a_phone_and_a_projector,
+    assert_stands_alone,
+    browser,
+    open_page,
+)
 from tracer.cli import main
 
 __all__ = ["browser"]  # the fixture, shared with test_pages.py
@@ -70,6 +77,7 @@ def test_the_class_page_counts_what_the_results_say(grades, browser):
     assert_offline_and_whole(page, requests, errors, out.parent)
     (ROOT / "out").mkdir(exist_ok=True)
     page.screenshot(path=str(ROOT / "out" / "report-class.png"), full_page=True)
+    assert_reads_on_a_phone_and_a_projector(page)
     rows = page.locator("table.matrix tbody tr")
     assert rows.count() == len(results)
     # Each cell: the failing checks of that student and concept, as results.json has them.
@@ -150,3 +158,11 @@ def test_bad_grades_directories_are_named(tmp_path, capsys):
     assert main(["report", "class", str(tmp_path / "bad"), "--out", str(tmp_path / "c")]) == 2
     assert "zed/results.json" in capsys.readouterr().err
     assert not (tmp_path / "c").exists()
+
+
+def test_a_single_file_class_page_stands_alone(grades, browser, tmp_path):
+    grades_dir, _ = grades
+    out = tmp_path / "class"
+    assert main(["report", "class", str(grades_dir), "--out", str(out), "--single-file"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["index.html"]  # no scores.png beside it
+    assert_stands_alone(browser, out / "index.html", tmp_path)

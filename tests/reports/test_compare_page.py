@@ -7,8 +7,18 @@ from pathlib import Path
 
 import pytest
 
-from tests.reports.test_pages import ROOT, assert_offline_and_whole, browser, images_of, open_page
+from reports.compare_page import write_compare_page
+from tests.reports.test_pages import (
+    ROOT,
+    assert_offline_and_whole,
+    assert_reads_on_a_phone_and_a_projector,
+    assert_stands_alone,
+    browser,
+    images_of,
+    open_page,
+)
 from tracer.cli import main
+from tracer.scene import load_scene
 
 __all__ = ["browser"]  # the fixture, shared with test_pages.py
 
@@ -43,8 +53,15 @@ def test_compare_html_in_a_browser(tmp_path: Path, browser) -> None:
     assert times == [r["renderer"] for r in rows]
     (ROOT / "out").mkdir(exist_ok=True)
     page.screenshot(path=str(ROOT / "out" / "report-compare.png"), full_page=True)
+    assert_reads_on_a_phone_and_a_projector(page)
+    # --single-file's page (the same rows, written again inlined) mailed alone.
+    path = write_compare_page(load_scene(SCENE), rows, out, inline=True)
+    assert all((out / s).is_file() for s in srcs)  # compare's own outputs stay
+    assert_stands_alone(browser, path, tmp_path)
 
 
-def test_compare_html_needs_an_out_dir(capsys) -> None:
+def test_compare_html_needs_an_out_dir(capsys, tmp_path) -> None:
     assert main(["compare", str(SCENE), "--html"]) == 2
     assert "--out-dir" in capsys.readouterr().err
+    assert main(["compare", str(SCENE), "--out-dir", str(tmp_path), "--single-file"]) == 2
+    assert "--html" in capsys.readouterr().err

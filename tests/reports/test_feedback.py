@@ -13,7 +13,16 @@ import pytest
 from PIL import Image
 
 from lessons.mistakes import mistakes, write_mistake
-from tests.reports.test_pages import ROOT, assert_offline_and_whole, browser, images_of, open_page
+from reports.feedback import artifact_names, feedback_page
+from tests.reports.test_pages import (
+    ROOT,
+    assert_offline_and_whole,
+    assert_reads_on_a_phone_and_a_projector,
+    assert_stands_alone,
+    browser,
+    images_of,
+    open_page,
+)
 from tracer.cli import main
 
 __all__ = ["browser"]  # the fixture, shared with test_pages.py
@@ -69,6 +78,7 @@ def test_a_known_wrong_version_says_what_to_fix_on_the_first_screen(graded, brow
     assert "face_the_ray()" in fix and "Ng turned against d" in fix
     (ROOT / "out").mkdir(exist_ok=True)
     page.screenshot(path=str(ROOT / "out" / "report-feedback.png"), full_page=True)
+    assert_reads_on_a_phone_and_a_projector(page)
 
 
 def test_the_checks_on_the_page_are_those_of_results_json(graded, browser):
@@ -178,3 +188,18 @@ def test_a_failed_grading_leaves_the_old_page(graded, tmp_path, monkeypatch):
         _grade(graded["tmp"] / "wrong", out)
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["report"]  # no stage left
+
+
+def test_a_single_file_feedback_page_stands_alone(graded, browser, tmp_path):
+    """`--single-file`'s page (reports.feedback_page(..., inline=True)) mailed alone: every
+    image inlined; the image files stay beside results.json, which names them."""
+    source = graded["wrong"] / "results.json"
+    path = feedback_page(source, tmp_path / "page", inline=True)
+    files = artifact_names(json.loads(source.read_text()))
+    assert files and all((path.parent / name).is_file() for name in files)
+    assert_stands_alone(browser, path, tmp_path)
+
+
+def test_single_file_needs_a_report(tmp_path, capsys):
+    assert main(["lesson", "grade", str(tmp_path), "--lesson", "L04", "--single-file"]) == 2
+    assert "--report" in capsys.readouterr().err

@@ -91,6 +91,38 @@ def assert_offline_and_whole(page, requests, errors, root: Path):
     assert all(b - a <= 1 for a, b in itertools.pairwise(levels)), levels
 
 
+# A phone's viewport (CSS pixels of a small phone held upright) and a projector's (1080p).
+PHONE = {"width": 360, "height": 740}
+PROJECTOR = {"width": 1920, "height": 1080}
+
+
+def assert_reads_on_a_phone_and_a_projector(page) -> None:
+    """On a phone the page is one column: nothing wider than the screen but what scrolls in
+    its own box (a wide table, a code block), so the text never runs off the side; on a
+    projector the body text is at least 16 CSS pixels (readable from the back of a room only
+    if the browser's default is kept, not shrunk)."""
+    page.set_viewport_size(PHONE)
+    width = page.evaluate("document.documentElement.scrollWidth")
+    assert width <= PHONE["width"], f"the page is {width} px wide on a {PHONE['width']} px phone"
+    page.set_viewport_size(PROJECTOR)
+    size = page.evaluate("parseFloat(getComputedStyle(document.body).fontSize)")
+    assert size >= 16, size
+
+
+def assert_stands_alone(browser, path: Path, tmp: Path) -> None:
+    """A --single-file page copied alone into an empty directory (as mailed) still shows every
+    image, each inlined as a data: URI, and makes no request but its own."""
+    alone = tmp / "alone"
+    alone.mkdir()
+    copy = alone / path.name
+    copy.write_bytes(path.read_bytes())
+    page, requests, errors = open_page(browser, copy)
+    assert_offline_and_whole(page, requests, errors, alone)
+    srcs = [src for src, _, _ in images_of(page)]
+    assert srcs and all(src.startswith("data:image/png;base64,") for src in srcs)
+    assert requests == [copy.resolve().as_uri()]
+
+
 def test_l04_page_in_a_browser(site, pages, browser):
     page, requests, errors = open_page(browser, site / "L04" / "index.html")
     assert_offline_and_whole(page, requests, errors, site)
@@ -119,6 +151,7 @@ def test_l04_page_in_a_browser(site, pages, browser):
     # A screenshot of the page kind, kept as the test's artefact.
     (ROOT / "out").mkdir(exist_ok=True)
     page.screenshot(path=str(ROOT / "out" / "report-lesson-L04.png"), full_page=True)
+    assert_reads_on_a_phone_and_a_projector(page)
 
 
 def test_l04_page_reads_without_javascript(site, browser):
@@ -134,6 +167,8 @@ def test_course_index_in_a_browser(site, browser):
     assert links == ["L01/index.html", "L04/index.html"]
     for link in links:
         assert (site / link).is_file()
+    page.screenshot(path=str(ROOT / "out" / "report-course-index.png"), full_page=True)
+    assert_reads_on_a_phone_and_a_projector(page)
     # L01's page: its text, a metric table per scene, the probes' concepts and the mistakes.
     page, requests, errors = open_page(browser, site / "L01" / "index.html")
     assert_offline_and_whole(page, requests, errors, site)
@@ -146,10 +181,7 @@ def test_course_index_in_a_browser(site, browser):
 def test_single_file_page_inlines_every_image(pages, browser, tmp_path):
     path = write_lesson_site(tmp_path, pages["L04"], inline=True)
     assert sorted(p.name for p in path.parent.iterdir()) == ["index.html", "metrics.json"]
-    page, requests, errors = open_page(browser, path)
-    assert_offline_and_whole(page, requests, errors, tmp_path)
-    srcs = [src for src, _, _ in images_of(page)]
-    assert srcs and all(src.startswith("data:image/png;base64,") for src in srcs)
+    assert_stands_alone(browser, path, tmp_path)
 
 
 class Cells(html.parser.HTMLParser):
