@@ -56,6 +56,14 @@ TOLERANCE_ARGUMENT = {
         "float32, moving hit points by ~1e-6, which a Phong lobe of exponent up to 200 turns "
         "into ~2e-4 relative of a highlight of at most 0.5"
     ),
+    # A path scene's row (path_scene_page): Monte Carlo estimates agree in the statistical sense.
+    "mitsuba-path": (
+        "statistical, as the grader's (lessons/scene_checks.py PathSceneCheck): each pixel's "
+        "z-test of rtlab's mean over its independent renders against Mitsuba's path tracer "
+        "at {ref_spp} spp, Šidák-corrected at alpha = {alpha:g} (the per-pixel tolerance is that "
+        "test's threshold: {z:.3g} standard errors), and the t-tests of the whole image's and "
+        "each block's mean; the image agrees when all of them pass"
+    ),
 }
 SHARE_ARGUMENT = (
     "at most {share:.3g}% of the pixels: grazing silhouettes may differ by a whole colour "
@@ -102,13 +110,21 @@ class ComparisonRow:
 
 @dataclass
 class ScenePage:
+    """One scene: the images shown and compared are rtlab's, rendered now, and the grader's
+    references (lessons/scene_checks.py references(): POV-Ray's and Mitsuba's, cached in
+    build/lesson-references), so the page's verdict is the grader's; the times are of the
+    references rendered again now, at the scene's own settings (``runs``)."""
+
     check: SceneCheck
     width: int
     height: int
-    runs: dict[str, RendererRun]
+    runs: dict[str, RendererRun]  # the times; rtlab's image
     rows: list[ComparisonRow]
     share_argument: str
-    tolerances: dict[str, Any] = field(default_factory=dict)  # per reference, as compared
+    images: dict[str, Image] = field(default_factory=dict)  # renderer -> the image compared
+    verdict: list[str] = field(default_factory=list)  # the grader's lines, Markdown
+    agrees: bool = True  # the grader's verdict on the solution
+    refs: dict[str, Any] = field(default_factory=dict)  # the grader's cached references
 
 
 @dataclass
@@ -122,7 +138,7 @@ class MistakeShown:
     pixels_changed: int = 0
     pixels: int = 0
     max_abs: float = 0.0
-    caught: str = ""  # what the scene check against POV-Ray says of it
+    caught: str = ""  # what the grader's check of that scene says of it (its first failure)
     build_seconds: float = 0.0
     cached: bool = False
     render_seconds: float = 0.0
@@ -171,13 +187,24 @@ def run_rtlab(scene: Any) -> RendererRun:
                        dict(result.rays))  # fmt: skip
 
 
-def run_reference(name: str, scene: Any) -> tuple[RendererRun, Any]:
+def run_reference(name: str, scene: Any) -> RendererRun:
+    """A reference renderer on the scene, timed now (reference/compare.py's runners): a stereo
+    pair one eye at a time (the converters take one eye), the eyes' times and rays added."""
+    from lessons.scene_checks import _stereo_layout
     from reference.compare import run_reference as run
+    from tracer.render import eye_scene
 
+    if _stereo_layout(scene) is not None:
+        eyes = [run_reference(name, eye_scene(scene, eye)) for eye in ("left", "right")]
+        rays = {k: eyes[0].rays.get(k, 0) + eyes[1].rays.get(k, 0)
+                for k in {*eyes[0].rays, *eyes[1].rays}}  # fmt: skip
+        return RendererRun(name, eyes[0].image, sum(e.trace_seconds for e in eyes),
+                           sum(e.whole_seconds for e in eyes), rays,
+                           "both eyes, one at a time")  # fmt: skip
     r = run(name, scene, threads=2)
     rays = {k: int(v) for k, v in r.notes.get("rays", {}).items()}
-    note = r.notes.get("variant", "")
-    return RendererRun(name, r.image, r.trace_seconds, r.whole_seconds, rays, note), r.tolerance
+    return RendererRun(name, r.image, r.trace_seconds, r.whole_seconds, rays,
+                       r.notes.get("variant", ""))  # fmt: skip
 
 
 def compare_row(
@@ -208,17 +235,85 @@ def compare_row(
 
 
 def scene_page(check: SceneCheck) -> ScenePage:
+    """A classic scene: rtlab's image and aov rendered now, judged by the grader's own
+    comparisons (lessons/scene_checks.py judge) against its cached references; each
+    reference's metric row by the same rule; each reference timed again now."""
+    from lessons.scene_checks import PathSceneCheck, Rendered, judge, references
+    from reference.metrics import FLOAT32_SLACK, MITSUBA_TOLERANCE
+    from tracer.render import render_with_stats
+
+    if isinstance(check, PathSceneCheck):
+        return path_scene_page(check)
     scene = check.load()
     share = share_bound(scene.camera.width)
-    runs = {"rtlab": run_rtlab(scene)}
-    rows, tolerances = [], {}
+    refs = references(check)
+    ours = run_rtlab(scene)
+    aov = render_with_stats(scene.with_overrides(integrator="aov"), threads=2, progress=False)
+    verdict = judge(check, Rendered("ok", image=ours.image, aov=aov.image, rays=ours.rays), refs)
+    runs, rows, images = {"rtlab": ours}, [], {"rtlab": ours.image}
     for name in check.references:
-        run, tolerance = run_reference(name, scene)
-        runs[name], tolerances[name] = run, tolerance
-        rows.append(compare_row(check, name, run.image, runs["rtlab"].image, tolerance, share))
+        runs[name] = run_reference(name, scene)
+        images[name] = refs[name]
+        tolerance = refs["povray_bound"] + FLOAT32_SLACK if name == "povray" else MITSUBA_TOLERANCE
+        rows.append(compare_row(check, name, refs[name], ours.image, tolerance, share))
     width, height = scene.camera.width, scene.camera.height
     argument = SHARE_ARGUMENT.format(share=100 * share, width=width)
-    return ScenePage(check, width, height, runs, rows, argument, tolerances)
+    return ScenePage(check, width, height, runs, rows, argument, images, verdict.lines,
+                     verdict.ok, refs)  # fmt: skip
+
+
+def path_scene_page(check: Any) -> ScenePage:
+    """A path-traced scene: rtlab renders the grader's independent replicates now (one ray at a
+    time, each its own seed); the grader's statistical comparison (judge_path) against
+    Mitsuba's path tracer at high spp (cached); the metric row of their mean against
+    Mitsuba's mean; Mitsuba timed now at the scene's own spp (one render, as rtlab's one)."""
+    from scipy import stats
+
+    from lessons.scene_checks import Rendered, judge_path, path_seeds, references
+    from reference.metrics import compare
+
+    scene = check.load()
+    refs = references(check)
+    seeds = path_seeds(check) or []
+    replicates = [run_rtlab(scene.with_overrides(seed=seed)) for seed in seeds]
+    images = [r.image for r in replicates]
+    verdict = judge_path(check, Rendered("ok", image=images), refs)
+    first = replicates[0]
+    note = f"one of {len(seeds)} renders, {scene.render.spp} spp"
+    ours = RendererRun("rtlab", first.image, first.trace_seconds, first.whole_seconds,
+                       first.rays, note)  # fmt: skip
+    runs = {"rtlab": ours}
+    mean = np.mean(np.stack(images).astype(np.float64), axis=0).astype(np.float32)
+    shown = {"rtlab": mean}
+    spp_total = scene.render.spp * len(images)
+    ref_spp = int(refs["path_spp"])
+    variance = np.maximum(refs["path_variance"], np.var(images, axis=0, ddof=1) * scene.render.spp)
+    pixels = scene.camera.width * scene.camera.height
+    alpha_sidak = 1 - (1 - check.alpha) ** (1 / (3 * pixels))
+    z = float(stats.norm.isf(alpha_sidak / 2))
+    tolerance = z * np.sqrt(np.maximum(variance, 1e-4) / spp_total)
+    rows = []
+    if "mitsuba" in check.references:
+        runs["mitsuba"] = run_reference("mitsuba", scene)
+        runs["mitsuba"].note = f"{scene.render.spp} spp, timed now; the reference: {ref_spp} spp"
+        reference = refs["path_mean"].astype(np.float32)
+        shown["mitsuba"] = reference
+        c = compare(reference, mean, tolerance)
+        rows.append(ComparisonRow(
+            scene=check.name, renderer="mitsuba", rmse=c.rmse, max_abs=c.max_abs, psnr=c.psnr,
+            ssim=c.ssim, flip=c.flip, over_tolerance=c.over_tolerance, pixels_over=c.pixels_over,
+            pixels=pixels, tolerance=f"z-test per pixel, at most {c.tolerance:.3g}",
+            tolerance_argument=TOLERANCE_ARGUMENT["mitsuba-path"].format(
+                ref_spp=ref_spp, alpha=check.alpha, z=z),
+            max_share=0.0025, agrees=verdict.ok, verdict="; ".join(verdict.lines),
+        ))  # fmt: skip
+    width, height = scene.camera.width, scene.camera.height
+    argument = (
+        "the z-test passes in at least 99.75% of the pixels' channels (reference/stats.py "
+        "pixel_test), and the t-tests of the image's and every block's mean pass"
+    )
+    return ScenePage(check, width, height, runs, rows, argument, shown, verdict.lines,
+                     verdict.ok, refs)  # fmt: skip
 
 
 # --- the known-wrong versions ---------------------------------------------------------------
@@ -257,7 +352,7 @@ def build_mistake(mistake: Mistake, work: Path, cache: Path = MISTAKE_CACHE) -> 
 
 
 def show_mistake(mistake: Mistake, scenes: list[ScenePage]) -> MistakeShown:
-    from lessons.scene_checks import compare_image, render_student
+    from lessons.scene_checks import judge, render_student
 
     checks = [s.check for s in scenes]
     with tempfile.TemporaryDirectory(prefix="rtlab-report-") as tmp:
@@ -276,24 +371,31 @@ def show_mistake(mistake: Mistake, scenes: list[ScenePage]) -> MistakeShown:
         if r.image is None:
             shown.outcome, shown.message, shown.scene = r.kind, r.message, page.check.name
             return shown
-        correct = page.runs["rtlab"].image
-        diff = np.abs(r.image.astype(np.float64) - correct.astype(np.float64)).max(axis=-1)
+        # A path scene's renders are the grader's replicates (the solution's seeds): their
+        # mean is the image, against the solution's mean of the same seeds.
+        image = r.image if r.image.ndim == 3 else np.mean(r.image, axis=0, dtype=np.float64)
+        image = np.asarray(image, np.float32)
+        correct = page.images["rtlab"]
+        diff = np.abs(image.astype(np.float64) - correct.astype(np.float64)).max(axis=-1)
         changed = int(np.sum(~(diff <= VISIBLE_CHANGE)))  # NaN counts as changed
         # The scene of the mistake's own concept first, then the one it changes most.
         rank = (changed > 0, page.check.concept == mistake.concept, changed)
         if best is None or rank > best[0]:
-            best = (rank, page, r.image, changed, float(np.nanmax(diff)))
+            best = (rank, page, image, changed, float(np.nanmax(diff)), r)
     assert best is not None
-    _, page, image, changed, worst = best
-    shown.scene, shown.image, shown.correct = page.check.name, image, page.runs["rtlab"].image
+    _, page, image, changed, worst, rendered_best = best
+    shown.scene, shown.image, shown.correct = page.check.name, image, page.images["rtlab"]
     shown.pixels_changed, shown.max_abs = changed, worst
     shown.pixels = int(image.shape[0] * image.shape[1])
-    if "povray" in page.runs:
-        pov, tol = page.runs["povray"], page.tolerances["povray"]
-        ok, text = compare_image("POV-Ray", pov.image, image, tol, share_bound(page.width))
-        # compare_image's line without its "against POV-Ray: " and Markdown emphasis.
-        said = text.replace("**", "").split(": ", 1)[1].removeprefix("differs: ")
-        shown.caught = ("passes: " if ok else "fails: ") + said
+    verdict = judge(page.check, rendered_best, page.refs)
+    failing = [line for line in verdict.lines if "**differs**" in line or "**" in line]
+    if verdict.ok:
+        shown.caught = "passes every comparison of the scene"
+    else:
+        # The grader's first failing line ("against X: **differs**: ..."), said as a sentence.
+        line = (failing or verdict.lines)[0]
+        line = line.replace(": **differs**:", ":", 1).replace("**", "")
+        shown.caught = "fails " + line
     return shown
 
 

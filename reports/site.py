@@ -59,6 +59,13 @@ def markdown_html(text: str) -> str:
     return md.render(_products_escaped(text))
 
 
+def markdown_inline(text: str) -> str:
+    """One line of Markdown (a grader's verdict line) as inline HTML: no paragraph around it."""
+    from markdown_it import MarkdownIt
+
+    return MarkdownIt("commonmark", {"html": False}).renderInline(_products_escaped(text))
+
+
 def _ssim(value: float) -> str:
     """SSIM near 1 as 1 - its distance from 1, which is what tells two such images apart."""
     if math.isfinite(value) and 0 < 1 - value < 1e-3:
@@ -97,6 +104,8 @@ def environment() -> Any:
     env.filters["ssim"] = _ssim
     env.filters["sentence"] = lambda v: v[:1].upper() + v[1:]
     env.filters["pct"] = lambda v: f"{100 * v:.3g}%"
+    env.filters["md"] = markdown_html
+    env.filters["md_inline"] = markdown_inline
     env.globals["NAMES"] = NAMES
     return env
 
@@ -176,10 +185,10 @@ def render_lesson(page: LessonPage, directory: Path, *, inline: bool, index: boo
     assets = Assets(directory, inline)
     scenes = []
     for s in page.scenes:
-        ours = s.runs["rtlab"].image
-        images = {name: assets.image(f"{s.check.name}-{name}.png", run.image)
-                  for name, run in s.runs.items()}  # fmt: skip
-        heat = {name: assets.heat_map(f"{s.check.name}-diff-{name}.png", s.runs[name].image, ours)
+        ours = s.images["rtlab"]
+        images = {name: assets.image(f"{s.check.name}-{name}.png", image)
+                  for name, image in s.images.items()}  # fmt: skip
+        heat = {name: assets.heat_map(f"{s.check.name}-diff-{name}.png", s.images[name], ours)
                 for name in s.check.references}  # fmt: skip
         scenes.append({"page": s, "images": images, "heat": heat})
     mistakes = []

@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from lessons.scene_checks import lesson_scenes
-from reference.metrics import compare
+from lessons.scene_checks import lesson_scenes, references
+from reference.metrics import FLOAT32_SLACK, MITSUBA_TOLERANCE, compare
 from reports.lesson import build_lesson_page
 from reports.site import markdown_html, write_course_site, write_lesson_site
 
@@ -222,11 +222,15 @@ def test_the_numbers_on_the_page_are_the_metrics_of_its_images(site, pages):
     rows = json.loads((site / "L04" / "metrics.json").read_text())
     checked = 0
     for s in pages["L04"].scenes:
-        ours = s.runs["rtlab"].image
+        ours = s.images["rtlab"]
         # The page's rtlab image is the solution's render (packets give the same bits).
         assert np.array_equal(ours, tracer.render(s.check.load(), threads=2, progress=False))
+        refs = references(s.check)
         for name in s.check.references:
-            again = compare(s.runs[name].image, ours, s.tolerances[name]).as_dict()
+            # The images compared are the grader's references, under the grader's tolerances.
+            assert np.array_equal(s.images[name], refs[name])
+            bound = refs["povray_bound"] + FLOAT32_SLACK if name == "povray" else MITSUBA_TOLERANCE
+            again = compare(refs[name], ours, bound).as_dict()
             row = next(r for r in rows if r["scene"] == s.check.name and r["renderer"] == name)
             for field in ("rmse", "max_abs", "psnr", "ssim", "flip", "over_tolerance"):
                 value, text = cells.cells[(f"metrics-{s.check.name}", name, field)]
@@ -249,9 +253,7 @@ def test_a_failed_run_leaves_the_old_site(site, pages, tmp_path):
     shutil.copytree(site, out)
     before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
     broken = dataclasses.replace(pages["L04"].scenes[0])
-    broken.runs = dict(
-        broken.runs, rtlab=dataclasses.replace(broken.runs["rtlab"], image=np.zeros((4, 4)))
-    )
+    broken.images = dict(broken.images, rtlab=np.zeros((4, 4)))
     page = dataclasses.replace(pages["L04"], scenes=[broken])
     with pytest.raises(ValueError, match="shape"):  # the injected failure happened
         write_lesson_site(out, page)
@@ -279,3 +281,50 @@ def test_unknown_lesson_is_bad_input(capsys):
 
     assert main(["report", "lesson", "L99", "--out", "/nonexistent/site"]) == 2
     assert "L99" in capsys.readouterr().err
+
+
+@pytest.fixture(scope="module")
+def special(tmp_path_factory):
+    """L11 (stereo pairs: the references render one eye at a time) and L12 (path-traced
+    scenes, compared in the statistical sense), each scene as the grader judges it."""
+    out = tmp_path_factory.mktemp("special") / "site"
+    pages = {
+        i: build_lesson_page(i, mistake_cap=1, command="tests/reports") for i in ("L11", "L12")
+    }
+    write_course_site(out, pages.__getitem__, list(pages), command="tests/reports")
+    return out, pages
+
+
+def test_stereo_and_path_scenes_are_judged_as_the_grader_judges_them(special, browser):
+    from lessons.scene_checks import PathSceneCheck, path_seeds
+
+    out, pages = special
+    for lesson, page in pages.items():
+        assert [s.check.name for s in page.scenes] == [c.name for c in lesson_scenes(lesson)]
+        for s in page.scenes:
+            # The course's solution passes the grader's check of every scene, and says so.
+            assert s.agrees, (lesson, s.check.name, s.verdict)
+            assert s.verdict and all("**differs**" not in line for line in s.verdict)
+            assert all(row.agrees for row in s.rows)
+            if isinstance(s.check, PathSceneCheck):  # the mean of the grader's replicates
+                scene = s.check.load()
+                import tracer
+
+                again = [tracer.render(scene.with_overrides(seed=seed), threads=2,
+                                       progress=False) for seed in path_seeds(s.check)]  # fmt: skip
+                mean = np.mean(np.asarray(again, np.float64), axis=0)
+                # The page's mean is of the same float32 renders, summed in double and rounded
+                # to float32 once: within float32's half ulp (2^-24 relative) of this one.
+                assert np.allclose(s.images["rtlab"], mean, rtol=2**-23, atol=0)
+                assert np.array_equal(s.images["mitsuba"], references(s.check)["path_mean"]
+                                      .astype(np.float32))  # fmt: skip
+            elif s.check.load().camera.stereo is not None:  # both eyes, side by side or not
+                assert s.images["povray"].shape == s.images["rtlab"].shape
+    shown = pages["L12"].mistakes_shown
+    assert len(shown) == 1 and shown[0].changes_picture and shown[0].caught.startswith("fails ")
+    for lesson in pages:
+        page, requests, errors = open_page(browser, out / lesson / "index.html")
+        assert_offline_and_whole(page, requests, errors, out)
+        said = page.eval_on_selector_all(".grader strong", "els => els.map(e => e.textContent)")
+        assert said == ["it passes"] * len(pages[lesson].scenes)
+        assert "<p>" not in page.inner_text("main")  # the verdict lines' Markdown rendered
