@@ -185,6 +185,7 @@ SUITES: dict[str, Callable[..., list[dict[str, Any]]]] = {
     "geometry": suite_geometry,
     "convergence": suite_convergence,
     "grading": lambda: __import__("lessons.bench").bench.suite_grading(),  # lessons/bench.py
+    "report": lambda: __import__("reports.bench").bench.suite_report(),  # reports/bench.py
 }
 
 
