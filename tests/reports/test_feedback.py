@@ -203,3 +203,24 @@ def test_a_single_file_feedback_page_stands_alone(graded, browser, tmp_path):
 def test_single_file_needs_a_report(tmp_path, capsys):
     assert main(["lesson", "grade", str(tmp_path), "--lesson", "L04", "--single-file"]) == 2
     assert "--report" in capsys.readouterr().err
+
+
+def test_a_crash_is_named_on_the_first_screen(tmp_path, browser):
+    """A submission whose lambert_term() writes through a null pointer: the page says which
+    function crashed and how, on the first screen, and the check shows the crash text."""
+    mistake = _mistake("two_sided_lambert")
+    path = write_mistake(mistake, tmp_path / "sub")
+    text = path.read_text()
+    crashing = text.replace(mistake.new, "volatile int *nowhere = nullptr; *nowhere = 1; "
+                            + mistake.new, 1)  # fmt: skip
+    assert crashing != text  # the crash was injected
+    path.write_text(crashing)
+    _grade(tmp_path / "sub", tmp_path / "report", "--no-scenes")
+    page, requests, errors = _first_screen(browser, tmp_path / "report" / "index.html")
+    assert_offline_and_whole(page, requests, errors, tmp_path / "report")
+    box = page.locator("#diagnosis").bounding_box()
+    assert box is not None and box["y"] + box["height"] <= FIRST_SCREEN, box
+    diagnosis = page.inner_text("#diagnosis")
+    assert "crashed" in diagnosis and "lambert_term()" in diagnosis
+    assert "SIGSEGV (in lambert_term())" in page.inner_text("#failing")  # the check says how
+    page.screenshot(path=str(ROOT / "out" / "report-feedback-crash.png"), full_page=True)
