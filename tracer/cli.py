@@ -296,7 +296,23 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("report", help="the course's pages: a lesson's, or every lesson's")
     _add_report_arguments(p)
     p.set_defaults(func=cmd_report)
+
+    p = sub.add_parser("study", help="numerical studies: stiff cases, every method side by side")
+    _add_study_arguments(p)
+    p.set_defaults(func=cmd_study)
     return parser
+
+
+def _add_study_arguments(parser: argparse.ArgumentParser) -> None:
+    from study.cli import add_arguments
+
+    add_arguments(parser)
+
+
+def cmd_study(args: argparse.Namespace) -> int:
+    from study.cli import run
+
+    return run(args)
 
 
 def _add_report_arguments(parser: argparse.ArgumentParser) -> None:

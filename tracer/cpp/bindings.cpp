@@ -387,4 +387,78 @@ NB_MODULE(_core, m) {
             return triple(rt::offset_ray_origin(vec(p), vec(p_error), vec(normal), vec(toward)));
         },
         "p"_a, "p_error"_a, "normal"_a, "toward"_a);
+
+    // Issue 11's study (study/): many rays at once through the scene's own closest_hit() and
+    // any_hit(), the functions the renderer runs, so that what the study measures is what a
+    // render does, not a re-implementation. One call per batch: a Python loop over single rays
+    // would make the timings measure the binding, not the intersection. closest_hit() searches
+    // t in (0, infinity), as every ray of the renderer does; a closest hit beyond tmax is
+    // therefore exactly "no hit in (0, tmax)".
+    using Rays = nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig>;
+    using Column = nb::ndarray<nb::numpy, double, nb::shape<-1>>;
+    using Columns = nb::ndarray<nb::numpy, double, nb::shape<-1, 3>>;
+    m.def(
+        "intersect",
+        [](const rt::Scene &s, Rays origins, Rays directions, double tmax) {
+            const size_t n = origins.shape(0);
+            if (directions.shape(0) != n)
+                throw std::invalid_argument("one direction per origin expected");
+            // One owned block for the five outputs (t, p, p_error, Ng as doubles; the object
+            // index and the hit flag as doubles too, converted by the Python side): a capsule
+            // per array would cost five allocations and five owners for no gain.
+            double *out = new double[n * 12];
+            nb::capsule owner(out, [](void *p) noexcept { delete[] static_cast<double *>(p); });
+            {
+                nb::gil_scoped_release release;
+                rt::RayCounts counts;
+                for (size_t i = 0; i < n; ++i) {
+                    rt::Ray ray{{origins(i, 0), origins(i, 1), origins(i, 2)},
+                                {directions(i, 0), directions(i, 1), directions(i, 2)}};
+                    rt::Hit hit = rt::closest_hit(s, ray, counts);
+                    bool found = hit.found() && hit.t < tmax;
+                    double *row = out + i * 12;
+                    row[0] = found ? hit.t : rt::infinity;
+                    const Vec3 v[3] = {hit.p, hit.p_error, hit.Ng};
+                    for (int k = 0; k < 3; ++k)
+                        row[1 + 3 * k] = v[k].x, row[2 + 3 * k] = v[k].y, row[3 + 3 * k] = v[k].z;
+                    row[10] = found ? hit.object : -1;
+                    row[11] = found ? 1 : 0;
+                }
+            }
+            // Strides in elements (nanobind's convention): row i of each output starts at 12 i.
+            Column t(out, {n}, owner, {12});
+            Columns p(out + 1, {n, 3}, owner, {12, 1}), e(out + 4, {n, 3}, owner, {12, 1}),
+                ng(out + 7, {n, 3}, owner, {12, 1});
+            Column object(out + 10, {n}, owner, {12}), hit(out + 11, {n}, owner, {12});
+            return std::make_tuple(hit, t, p, e, ng, object);
+        },
+        "scene"_a, "origins"_a, "directions"_a, "tmax"_a = rt::infinity,
+        "For each ray (origins, directions: (N, 3) float64) the closest hit with t in (0, tmax), "
+        "as the renderer finds it (closest_hit): (hit, t, p, p_error, Ng, object), each a view "
+        "of one (N, 12) block; hit and object as float64 (1/0, index or -1), t infinity on a "
+        "miss.");
+    m.def(
+        "occluded",
+        [](const rt::Scene &s, Rays origins, Rays directions,
+           nb::ndarray<const double, nb::shape<-1>, nb::c_contig> tmax) {
+            const size_t n = origins.shape(0);
+            if (directions.shape(0) != n || tmax.shape(0) != n)
+                throw std::invalid_argument("one direction and one tmax per origin expected");
+            double *out = new double[n];
+            nb::capsule owner(out, [](void *p) noexcept { delete[] static_cast<double *>(p); });
+            {
+                nb::gil_scoped_release release;
+                rt::RayCounts counts;
+                for (size_t i = 0; i < n; ++i) {
+                    rt::Ray ray{{origins(i, 0), origins(i, 1), origins(i, 2)},
+                                {directions(i, 0), directions(i, 1), directions(i, 2)}};
+                    // The range a shadow ray asks about (shadow_ray_to(), 04_hit.h): (0, tmax).
+                    out[i] = rt::any_hit(s, ray, {0, tmax(i)}, counts) ? 1 : 0;
+                }
+            }
+            return Column(out, {n}, owner);
+        },
+        "scene"_a, "origins"_a, "directions"_a, "tmax"_a,
+        "For each ray whether anything lies at t in (0, tmax[i]), as a shadow ray asks "
+        "(any_hit): float64 1/0.");
 }

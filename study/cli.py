@@ -1,0 +1,33 @@
+"""``rtlab study stiff --out DIR [--quick] [--family NAME]``: the verb's work (its entry in the
+parser lives in tracer/cli.py beside the other verbs)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    sub = parser.add_subparsers(dest="study_command", required=True)
+    p = sub.add_parser("stiff", help="stiff and extreme cases: where each method breaks")
+    p.add_argument("--out", required=True, help="the study's directory, e.g. study/")
+    p.add_argument("--quick", action="store_true",
+                   help="a fixed-seed subset: a few knob values, 1000 rays each")  # fmt: skip
+    p.add_argument("--family", help="one family only (default: all)")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Exit status: 0 done; 2 bad input (an unknown family, an --out that is a file)."""
+    from study.run import StudyError
+    from study.run import run as run_study
+
+    try:
+        summary = run_study(Path(args.out), quick=args.quick, family=args.family)
+    except StudyError as error:
+        print(f"rtlab: error: {error}", file=sys.stderr)
+        return 2
+    fails = sum(1 for f in summary["failures"] if f["method"] == "rtlab")
+    print(f"rtlab: wrote {Path(args.out) / 'index.html'}: {len(summary['rows'])} rows in "
+          f"{summary['total_seconds']:.1f} s; rtlab failed on {fails} kept rays")  # fmt: skip
+    return 0

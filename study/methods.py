@@ -1,0 +1,293 @@
+"""The methods side by side. Each has a name, a version string and three functions on a batch
+of rays: ``trace`` (the first hit: hit, t, the point, its error bound where the method keeps
+one, the normal), ``spawn`` (where a ray leaving a hit towards a direction starts) and
+``occluded`` (whether anything lies at t in (0, tmax): a shadow ray).
+
+- ``rtlab``: the renderer's own code through the extension (tracer/rays.py: closest_hit,
+  any_hit, offset_ray_origin), in double.
+- ``textbook-double`` / ``textbook-float``: the formulas as textbooks print them, in numpy in
+  float64 / float32: the naive quadratic b^2 - 4ac and (-b -+ sqrt) / 2a, Moeller-Trumbore,
+  the slab test, t = (p0 - o).n / d.n, and a fixed offset of 1e-4 along the normal for spawned
+  rays. The float one rounds the scene and the rays to float32 first, as a float renderer does:
+  that rounding is part of its error (it is judged on the double rays, like every method).
+- ``mitsuba-scalar_rgb`` / ``mitsuba-llvm_ad_rgb``: mi.Scene.ray_intersect on the same rays
+  (spheres this session), version mi.__version__.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from study.shapes import Plane, Shape, Sphere, Triangle
+
+Array = npt.NDArray[np.float64]
+#: The textbook's fixed offset for spawned rays (the 1e-4 of countless course tracers).
+EPSILON = 1e-4
+
+
+@dataclass(frozen=True)
+class Traced:
+    hit: npt.NDArray[np.bool_]
+    t: Array  # inf on a miss
+    p: Array
+    p_error: Array | None  # None: the method keeps no error bound
+    n: Array  # the geometric normal (outward for closed shapes, the plane's own)
+
+
+@dataclass(frozen=True)
+class Method:
+    name: str
+    version: str
+    kinds: frozenset[str]  # the shapes it applies to
+    trace: Callable[[Shape, Array, Array], Traced]
+    spawn: Callable[[Traced, Array], Array]
+    occluded: Callable[[Shape, Array, Array, Array], npt.NDArray[np.bool_]]
+    precision: str  # "double" or "float"
+
+
+# ------------------------------------------------------------------------------------ rtlab
+
+
+@functools.lru_cache(maxsize=64)
+def _core_scene(shape: Shape) -> object:
+    import tracer
+    from tracer.render import to_core
+
+    obj = shape.scene_object() | {"material": "m"}
+    scene = tracer.load_scene(
+        {
+            "camera": {
+                "eye": [0.0, 0.0, 1.0],
+                "look_at": [0.0, 0.0, 0.0],
+                "up": [0.0, 1.0, 0.0],
+                "fov_y": 30.0,
+                "width": 1,
+                "height": 1,
+            },
+            "materials": {"m": {"color": [1.0, 1.0, 1.0]}},
+            "objects": [obj],
+        }
+    )
+    return to_core(scene)
+
+
+def _rtlab_trace(shape: Shape, o: Array, d: Array) -> Traced:
+    from tracer import rays
+
+    h = rays.intersect(_core_scene(shape), o, d)
+    return Traced(h.hit, h.t, h.p, h.p_error, h.Ng)
+
+
+def _rtlab_spawn(tr: Traced, toward: Array) -> Array:
+    from tracer import rays
+
+    return rays.offset_ray_origin(tr.p, tr.p_error, tr.n, toward)
+
+
+def _rtlab_occluded(shape: Shape, o: Array, d: Array, tmax: Array) -> npt.NDArray[np.bool_]:
+    from tracer import rays
+
+    return rays.occluded(_core_scene(shape), o, d, tmax)
+
+
+# --------------------------------------------------------------------------------- textbook
+
+
+def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
+
+
+def _textbook(dtype: type) -> Callable[[Shape, Array, Array], Traced]:
+    def trace(shape: Shape, o_in: Array, d_in: Array) -> Traced:
+        o, d = o_in.astype(dtype), d_in.astype(dtype)
+        with np.errstate(all="ignore"):
+            if isinstance(shape, Sphere):
+                c, r = np.array(shape.center, dtype=dtype), dtype(shape.radius)
+                f = o - c
+                a, b, c0 = _dot(d, d), 2 * _dot(f, d), _dot(f, f) - r * r
+                disc = b * b - 4 * a * c0  # b^2 - 4ac, as printed
+                sq = np.sqrt(np.where(disc >= 0, disc, np.nan))
+                t0, t1 = (-b - sq) / (2 * a), (-b + sq) / (2 * a)
+                t = np.where(t0 > 0, t0, np.where(t1 > 0, t1, np.inf))
+                t = np.where(disc >= 0, t, np.inf)
+                hit = np.isfinite(t)
+                p = o + t[:, None] * d
+                n = (p - c) / r
+            elif isinstance(shape, Plane):
+                nn = np.array(shape.normal, dtype=dtype)
+                nn = nn / np.sqrt(_dot(nn, nn))
+                den = _dot(d, nn)
+                t = _dot(np.array(shape.point, dtype=dtype) - o, nn) / den
+                hit = (t > 0) & np.isfinite(t)
+                t = np.where(hit, t, np.inf)
+                p = o + t[:, None] * d
+                n = np.broadcast_to(nn, o.shape)
+            elif isinstance(shape, Triangle):
+                # Moeller and Trumbore 1997, with det == 0 as the parallel test (the paper's
+                # fixed 1e-6 would refuse every triangle below 1e-3 in size: another story).
+                v0, v1, v2 = (np.array(v, dtype=dtype) for v in (shape.a, shape.b, shape.c))
+                e1, e2 = v1 - v0, v2 - v0
+                pv = np.cross(d, e2)
+                det = _dot(pv, np.broadcast_to(e1, pv.shape))
+                inv = 1 / det
+                s = o - v0
+                u = _dot(s, pv) * inv
+                q = np.cross(s, e1)
+                v = _dot(d, q) * inv
+                t = _dot(np.broadcast_to(e2, q.shape), q) * inv
+                hit = (det != 0) & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0)
+                t = np.where(hit, t, np.inf)
+                p = o + t[:, None] * d
+                ng = np.cross(e1, e2)
+                n = np.broadcast_to(ng / np.sqrt(_dot(ng, ng)), o.shape)
+            else:
+                lo, hi = np.array(shape.lo, dtype=dtype), np.array(shape.hi, dtype=dtype)
+                inv = 1 / d
+                ta, tb = (lo - o) * inv, (hi - o) * inv
+                near = np.max(np.minimum(ta, tb), axis=1)
+                far = np.min(np.maximum(ta, tb), axis=1)
+                t = np.where(near > 0, near, far)
+                hit = (near <= far) & (t > 0)
+                t = np.where(hit, t, np.inf)
+                p = o + t[:, None] * d
+                # The face whose slab the hit lies on: the axis of the nearest bound.
+                dist = np.minimum(np.abs(p - lo), np.abs(p - hi))
+                axis = np.argmin(dist, axis=1)
+                sign = np.where(np.abs(p - hi) < np.abs(p - lo), 1, -1)[np.arange(len(p)), axis]
+                n = np.zeros_like(p)
+                n[np.arange(len(p)), axis] = sign
+        return Traced(hit, t.astype(np.float64), p.astype(np.float64), None,
+                      np.asarray(n, dtype=np.float64))  # fmt: skip
+
+    return trace
+
+
+def _textbook_spawn(dtype: type) -> Callable[[Traced, Array], Array]:
+    def spawn(tr: Traced, toward: Array) -> Array:
+        p, n = tr.p.astype(dtype), tr.n.astype(dtype)
+        with np.errstate(all="ignore"):  # a missed ray's point is inf: it is not spawned
+            side = np.where(_dot(toward.astype(dtype), n) < 0, -1, 1).astype(dtype)
+            return (p + (dtype(EPSILON) * side)[:, None] * n).astype(np.float64)
+
+    return spawn
+
+
+def _textbook_occluded(dtype: type) -> Callable[[Shape, Array, Array, Array], np.ndarray]:
+    trace = _textbook(dtype)
+
+    def occluded(shape: Shape, o: Array, d: Array, tmax: Array) -> npt.NDArray[np.bool_]:
+        tr = trace(shape, o, d)
+        return tr.hit & (tr.t < tmax.astype(dtype))
+
+    return occluded
+
+
+# ---------------------------------------------------------------------------------- Mitsuba
+
+
+@functools.lru_cache(maxsize=4)
+def _mitsuba(variant: str) -> object:
+    import mitsuba as mi
+
+    from converters.mitsuba import variants  # noqa: F401  (sets DRJIT_LIBLLVM_PATH first)
+
+    mi.set_variant(variant)
+    return mi
+
+
+@functools.lru_cache(maxsize=32)
+def _mi_scene(variant: str, shape: Sphere) -> object:
+    mi = _mitsuba(variant)
+    mi.set_variant(variant)
+    return mi.load_dict(
+        {
+            "type": "scene",
+            "s": {"type": "sphere", "center": list(shape.center), "radius": shape.radius},
+        }
+    )
+
+
+def _mitsuba_trace(variant: str) -> Callable[[Shape, Array, Array], Traced]:
+    def trace(shape: Shape, o: Array, d: Array) -> Traced:
+        mi = _mitsuba(variant)
+        mi.set_variant(variant)
+        scene = _mi_scene(variant, shape)
+        n = len(o)
+        t = np.full(n, np.inf)
+        p = np.zeros((n, 3))
+        nn = np.zeros((n, 3))
+        if variant.startswith("scalar"):
+            for i in range(n):
+                si = scene.ray_intersect(mi.Ray3f(mi.Point3f(*o[i]), mi.Vector3f(*d[i])))
+                if si.is_valid():
+                    t[i], p[i], nn[i] = si.t, list(si.p), list(si.n)
+        else:
+            ox, oy, oz = (o[:, k].astype(np.float32) for k in range(3))
+            dx, dy, dz = (d[:, k].astype(np.float32) for k in range(3))
+            ray = mi.Ray3f(mi.Point3f(ox, oy, oz), mi.Vector3f(dx, dy, dz))
+            si = scene.ray_intersect(ray)
+            valid = np.array(si.is_valid(), dtype=bool)
+            t = np.where(valid, np.array(si.t, dtype=np.float64), np.inf)
+            p = np.array(si.p, dtype=np.float64).reshape(3, n).T
+            nn = np.array(si.n, dtype=np.float64).reshape(3, n).T
+        return Traced(np.isfinite(t), t, p, None, nn)
+
+    return trace
+
+
+def _unsupported_spawn(tr: Traced, toward: Array) -> Array:
+    raise NotImplementedError("spawned rays are not measured for this method yet")
+
+
+def _unsupported_occluded(shape: Shape, o: Array, d: Array, tmax: Array) -> np.ndarray:
+    raise NotImplementedError("shadow rays are not measured for this method yet")
+
+
+def mitsuba_version() -> str:
+    import mitsuba as mi
+
+    return str(mi.__version__)
+
+
+ALL = ("sphere", "plane", "triangle", "box")
+
+
+def methods(include_mitsuba: bool = True) -> list[Method]:
+    """Every method, in the order the report lists them."""
+    out = [
+        Method("rtlab", "1", frozenset(ALL), _rtlab_trace, _rtlab_spawn, _rtlab_occluded,
+               "double"),
+        Method("textbook-double", "1", frozenset(ALL), _textbook(np.float64),
+               _textbook_spawn(np.float64), _textbook_occluded(np.float64), "double"),
+        Method("textbook-float", "1", frozenset(ALL), _textbook(np.float32),
+               _textbook_spawn(np.float32), _textbook_occluded(np.float32), "float"),
+    ]  # fmt: skip
+    if include_mitsuba:
+        version = mitsuba_version()
+        for variant in ("scalar_rgb", "llvm_ad_rgb"):
+            out.append(
+                Method(
+                    f"mitsuba-{variant}",
+                    version,
+                    frozenset({"sphere"}),
+                    _mitsuba_trace(variant),
+                    _unsupported_spawn,
+                    _unsupported_occluded,
+                    "float",
+                )
+            )
+    return out
+
+
+def ulps(computed: Array, exact: Array) -> Array:
+    """|computed - exact| in units of the last place of exact (both doubles; exact the true t
+    rounded to nearest, which costs at most half an ulp)."""
+    spacing = np.spacing(np.abs(exact))
+    with np.errstate(invalid="ignore"):
+        return np.abs(computed - exact) / np.where(spacing > 0, spacing, math.inf)

@@ -1,0 +1,170 @@
+"""The metrics of one method on one case, each against the truth (study/truth.py) of the very
+rays the method traced:
+
+- ``wrong_decisions``: share of decidable rays whose hit/miss differs from the truth (rays a
+  one-ulp move decides differently are counted apart, in ``undecidable``);
+- ``t_error_ulps_median`` / ``t_error_ulps_max``: |t - t_true| in ulps of t_true, over the rays
+  both call a hit; ``t_error_ulps_max_separated``: over those whose roots are well apart;
+- ``bound_violations``: share of hit points whose own error box holds no point of the true
+  surface (methods that report a bound: rtlab);
+- ``self_hits``: share of spawned rays that meet the surface they leave (an outward ray at all;
+  an inward one before half the true distance to the far side of a closed shape);
+  ``missed_far``: inward rays of a closed shape that never reach its far side;
+  ``wrong_side``: spawned origins on the wrong side of the true surface (exact);
+- ``false_occlusions``: share of shadow rays blocked where nothing lies between;
+- ``scale_mismatches``: share of rays whose t does not scale by exactly 2^k;
+- ``nan_inf``: share of reported hits with a NaN or infinite t or point;
+- ``time_per_ray_s``: wall time of the method's batch over its rays (the same rays for all).
+
+Every function returns (metrics, undecidable count, the indices of the failing rays per
+metric)."""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from typing import Any
+
+import mpmath
+import numpy as np
+
+from study import truth as oracle
+from study.families import Case
+from study.methods import Method, Traced, ulps
+from study.shapes import Box, Sphere
+
+Result = tuple[dict[str, float], int, dict[str, np.ndarray]]
+
+
+def timed(fn: Callable[..., Traced], *args: Any) -> tuple[Traced, float]:
+    """The call's result and its wall time (after a warm-up call on two rays, so that building
+    a scene or compiling a kernel is not counted)."""
+    fn(args[0], args[1][:2], args[2][:2])
+    start = time.perf_counter()
+    out = fn(*args)
+    return out, time.perf_counter() - start
+
+
+def _share(mask: np.ndarray, of: np.ndarray) -> float:
+    n = int(np.sum(of))
+    return float(np.sum(mask & of)) / n if n else 0.0
+
+
+def _nan_inf(tr: Traced) -> float:
+    bad = tr.hit & ~(np.isfinite(tr.t) & np.all(np.isfinite(tr.p), axis=1))
+    return _share(bad, np.ones(len(bad), dtype=bool))
+
+
+def decision(case: Case, method: Method, tru: oracle.Truth) -> Result:
+    tr, seconds = timed(method.trace, case.shape, case.origins, case.directions)
+    decidable = ~tru.undecidable
+    wrong = (tr.hit != tru.hit) & decidable
+    both = tr.hit & tru.hit & decidable
+    err = ulps(tr.t, tru.t)
+    err = np.where(both, err, np.nan)
+    sep = both & (tru.separation >= 0.5)
+    m: dict[str, float] = {
+        "wrong_decisions": _share(wrong, decidable),
+        "t_error_ulps_median": float(np.nanmedian(err)) if both.any() else 0.0,
+        "t_error_ulps_max": float(np.nanmax(err)) if both.any() else 0.0,
+        # Where the roots are well apart (half chord >= r / 2): t is well conditioned there.
+        "t_error_ulps_max_separated": float(np.nanmax(np.where(sep, err, np.nan)))
+        if sep.any()
+        else 0.0,
+        "nan_inf": _nan_inf(tr),
+        "time_per_ray_s": seconds / len(case.origins),
+    }
+    fails = {"wrong_decisions": np.flatnonzero(wrong)}
+    if tr.p_error is not None:
+        outside = np.array([bool(h) and not oracle.within_bound(case.shape, p, e)
+                            for h, p, e in zip(tr.hit, tr.p, tr.p_error, strict=True)])  # fmt: skip
+        m["bound_violations"] = _share(outside, tr.hit)
+        fails["bound_violations"] = np.flatnonzero(outside)
+    return m, int(np.sum(tru.undecidable)), fails
+
+
+def spawn(case: Case, method: Method) -> Result:
+    assert case.leave is not None and case.outward is not None
+    tr, seconds = timed(method.trace, case.shape, case.origins, case.directions)
+    hit = tr.hit & np.all(np.isfinite(tr.p), axis=1)
+    o2 = method.spawn(tr, case.leave)
+    o2 = np.where(hit[:, None], o2, case.origins)  # rays that missed are not spawned
+    tr2 = method.trace(case.shape, o2, case.leave)
+    closed = isinstance(case.shape, Sphere | Box)
+    far = np.array([
+        float(t) if (t := oracle.last_exit(case.shape, a, b)) is not None else math.inf
+        for a, b in zip(o2, case.leave, strict=True)
+    ]) if closed else np.full(len(o2), math.inf)  # fmt: skip
+    outward, inward = hit & case.outward, hit & ~case.outward
+    if closed:
+        self_hit = (outward & tr2.hit) | (inward & tr2.hit & (tr2.t < 0.5 * far))
+        missed = inward & ~tr2.hit
+    else:
+        self_hit = hit & tr2.hit
+        missed = np.zeros(len(hit), dtype=bool)
+    want = np.where(case.outward, 1, -1)
+    wrong_side = np.array([bool(h) and oracle.side(case.shape, p) != w
+                           for h, p, w in zip(hit, o2, want, strict=True)])  # fmt: skip
+    m = {
+        "self_hits": _share(self_hit, hit),
+        "missed_far": _share(missed, inward) if closed else 0.0,
+        "wrong_side": _share(wrong_side, hit),
+        "primary_misses": _share(~hit, np.ones(len(hit), dtype=bool)),
+        "nan_inf": _nan_inf(tr),
+        "time_per_ray_s": seconds / len(case.origins),
+    }
+    fails = {"self_hits": np.flatnonzero(self_hit), "missed_far": np.flatnonzero(missed)}
+    return m, 0, fails
+
+
+def shadow(case: Case, method: Method) -> Result:
+    assert case.light is not None
+    tr, seconds = timed(method.trace, case.shape, case.origins, case.directions)
+    hit = tr.hit & np.all(np.isfinite(tr.p), axis=1)
+    light = np.array(case.light)
+    o2 = method.spawn(tr, light - tr.p)
+    o2 = np.where(hit[:, None], o2, case.origins)
+    occ = method.occluded(case.shape, o2, light - o2, np.ones(len(o2))) & hit
+    # The truth: nothing lies between a point of a convex surface and a light on its outward
+    # side. For the sphere, whether the true hit point sees the light is decided at high
+    # precision; within a relative 1e-30 of its horizon the ray is counted undecidable.
+    clear = hit.copy()
+    undecidable = 0
+    if isinstance(case.shape, Sphere):
+        c = [mpmath.mpf(x) for x in case.shape.center]
+        lm = [mpmath.mpf(x) for x in case.light]
+        for i in np.flatnonzero(hit):
+            ok, t = oracle.first_hit(case.shape, case.origins[i], case.directions[i])
+            if not ok:
+                clear[i] = False
+                continue
+            q = [mpmath.mpf(float(a)) + t * mpmath.mpf(float(b))
+                 for a, b in zip(case.origins[i], case.directions[i], strict=True)]  # fmt: skip
+            height = sum((lk - qk) * (qk - ck) for lk, qk, ck in zip(lm, q, c, strict=True))
+            if abs(height) <= mpmath.mpf("1e-30") * case.shape.radius**2:
+                clear[i] = False
+                undecidable += 1
+            elif height < 0:
+                clear[i] = False
+    false = occ & clear
+    m = {
+        "false_occlusions": _share(false, clear),
+        "primary_misses": _share(~hit, np.ones(len(hit), dtype=bool)),
+        "nan_inf": _nan_inf(tr),
+        "time_per_ray_s": seconds / len(case.origins),
+    }
+    return m, undecidable, {"false_occlusions": np.flatnonzero(false)}
+
+
+def scale(case: Case, method: Method) -> Result:
+    tr, seconds = timed(method.trace, case.shape, case.origins, case.directions)
+    s = 2.0**case.scale_k
+    tr2 = method.trace(case.shape.scaled(s), case.origins * s, case.directions)
+    mismatch = (tr.hit != tr2.hit) | (tr.hit & (tr2.t != tr.t * s))
+    m = {
+        "scale_mismatches": _share(mismatch, np.ones(len(mismatch), dtype=bool)),
+        "nan_inf": _nan_inf(tr),
+        "time_per_ray_s": seconds / len(case.origins),
+    }
+    return m, 0, {"scale_mismatches": np.flatnonzero(mismatch)}

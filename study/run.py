@@ -1,0 +1,199 @@
+"""The study's run: every family's knob values, every method that applies, the metrics
+aggregated per knob value into rows, and the outputs (rows.json, breakdown.json,
+failures.json, a plot per family, index.html), each written atomically."""
+
+from __future__ import annotations
+
+import difflib
+import json
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from study import metrics, truth
+from study.families import FAMILIES, Case, Family
+from study.methods import Method, methods
+
+#: --quick: rays per knob value (the full run: FULL_RAYS), and the seed of every generator.
+QUICK_RAYS = 1000
+FULL_RAYS = 4000
+SEED = 20251
+
+#: The share of wrong answers past which a method is said to break (issue 11: 0.1%).
+BREAKDOWN = 1e-3
+#: The share metrics a breakdown is judged by, per protocol.
+HEADLINE = {"decision": "wrong_decisions", "spawn": "self_hits", "shadow": "false_occlusions",
+            "scale": "scale_mismatches"}  # fmt: skip
+#: Failing rays kept per family, knob value, method and metric (as hex floats).
+KEEP = 10
+
+
+class StudyError(ValueError):
+    """Bad input to the study (an unknown family, an --out that is a file)."""
+
+
+def family_named(name: str) -> Family:
+    if name in FAMILIES:
+        return FAMILIES[name]
+    near = difflib.get_close_matches(name, FAMILIES, n=1)
+    hint = f"; did you mean {near[0]!r}?" if near else ""
+    raise StudyError(f"--family: unknown family {name!r}{hint} (one of {', '.join(FAMILIES)})")
+
+
+@dataclass
+class _Acc:
+    rays: int = 0
+    undecidable: int = 0
+    sums: dict[str, float] | None = None
+    maxima: dict[str, float] | None = None
+
+    def add(self, m: dict[str, float], rays: int, undecidable: int) -> None:
+        self.sums = self.sums or {}
+        self.maxima = self.maxima or {}
+        for k, v in m.items():
+            if k.endswith("_max"):
+                self.maxima[k] = max(self.maxima.get(k, 0.0), v)
+            else:
+                self.sums[k] = self.sums.get(k, 0.0) + v * rays
+        self.rays += rays
+        self.undecidable += undecidable
+
+    def values(self) -> dict[str, float]:
+        out = {k: v / self.rays for k, v in (self.sums or {}).items()}
+        return out | dict(self.maxima or {})
+
+
+def _hex(v: np.ndarray) -> list[str]:
+    return [float(x).hex() for x in v]
+
+
+def _evaluate(case: Case, method: Method, tru: truth.Truth | None) -> metrics.Result:
+    if case.protocol == "decision":
+        assert tru is not None
+        return metrics.decision(case, method, tru)
+    if case.protocol == "spawn":
+        return metrics.spawn(case, method)
+    if case.protocol == "shadow":
+        return metrics.shadow(case, method)
+    return metrics.scale(case, method)
+
+
+def _applies(method: Method, case: Case) -> bool:
+    if case.shape.kind not in method.kinds:
+        return False
+    # Mitsuba is measured on first hits only this far (its spawn_ray and ray_test: to come).
+    return case.protocol == "decision" or not method.name.startswith("mitsuba")
+
+
+def run_family(
+    family: Family, quick: bool, all_methods: list[Method]
+) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+    rows: list[dict[str, Any]] = []
+    failures: list[dict[str, Any]] = []
+    values = family.quick_values if quick else family.values
+    n = QUICK_RAYS if quick else FULL_RAYS
+    for value in values:
+        index = list(FAMILIES).index(family.name)
+        # Seeded by the knob value's place in the full sweep: --quick traces a subset of it.
+        rng = np.random.default_rng([SEED, index, family.values.index(value)])
+        cases = family.generate(value, n, rng)
+        acc: dict[str, _Acc] = {}
+        for case in cases:
+            tru = None
+            if case.protocol == "decision":
+                # Route 2 on every 4th ray of the quick run, every ray of the full one.
+                tru = truth.truth(case.shape, case.origins, case.directions,
+                                  check_every=4 if quick else 1)  # fmt: skip
+            for method in all_methods:
+                if not _applies(method, case):
+                    continue
+                m, undecidable, fails = _evaluate(case, method, tru)
+                acc.setdefault(method.name, _Acc()).add(m, len(case.origins), undecidable)
+                for metric, idx in fails.items():
+                    for i in idx[:KEEP]:
+                        failures.append({
+                            "family": family.name, "knob_value": value, "method": method.name,
+                            "version": method.version, "metric": metric,
+                            "shape": {"kind": case.shape.kind} | case.shape.scene_object(),
+                            "origin": _hex(case.origins[i]), "direction": _hex(case.directions[i]),
+                        })  # fmt: skip
+        for method in all_methods:
+            if method.name not in acc:
+                continue
+            a = acc[method.name]
+            for metric, v in sorted(a.values().items()):
+                rows.append({
+                    "family": family.name, "knob": family.knob, "knob_value": value,
+                    "method": method.name, "version": method.version, "metric": metric,
+                    "value": v, "rays": a.rays, "undecidable": a.undecidable,
+                })  # fmt: skip
+    return rows, failures
+
+
+def breakdown(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Per family and method, the knob value where the headline share first exceeds 0.1%,
+    coming from the easy end (None: never): for families stiff at both ends, one per end."""
+    out = []
+    for family in FAMILIES.values():
+        mine = [r for r in rows if r["family"] == family.name]
+        for method in dict.fromkeys(r["method"] for r in mine):
+            shares = {r["metric"] for r in mine if r["method"] == method}
+            metric = next((m for m in HEADLINE.values() if m in shares), None)
+            if metric is None:
+                continue
+            over = sorted(r["knob_value"] for r in mine if r["method"] == method
+                          and r["metric"] == metric and r["value"] > BREAKDOWN)  # fmt: skip
+            entry: dict[str, Any] = {
+                "family": family.name,
+                "knob": family.knob,
+                "method": method,
+                "metric": metric,
+                "exceeding": over,
+            }
+            middle = 0.0 if not family.log_knob else 1.0
+            if family.stiffer == "up":
+                entry["breaks_at"] = over[0] if over else None
+            elif family.stiffer == "down":
+                entry["breaks_at"] = over[-1] if over else None
+            else:
+                low = [v for v in over if v < middle]
+                high = [v for v in over if v > middle]
+                entry["breaks_at"] = {"low": low[-1] if low else None,
+                                      "high": high[0] if high else None}  # fmt: skip
+            out.append(entry)
+    return out
+
+
+def run(out: Path, quick: bool = False, family: str | None = None,
+        include_mitsuba: bool = True) -> dict[str, Any]:  # fmt: skip
+    """Run the study into ``out``; returns a summary (rows, breakdown, seconds)."""
+    from tracer.image import atomic_path
+
+    families = [family_named(family)] if family else list(FAMILIES.values())
+    if out.exists() and not out.is_dir():
+        raise StudyError(f"--out: {out} is a file; expected a directory (it is created)")
+    start = time.perf_counter()
+    all_methods = methods(include_mitsuba)
+    rows: list[dict[str, Any]] = []
+    failures: list[dict[str, Any]] = []
+    seconds: dict[str, float] = {}
+    for f in families:
+        t0 = time.perf_counter()
+        r, fails = run_family(f, quick, all_methods)
+        rows += r
+        failures += fails
+        seconds[f.name] = time.perf_counter() - t0
+    brk = breakdown(rows)
+    out.mkdir(parents=True, exist_ok=True)
+    for name, data in (("rows.json", rows), ("breakdown.json", brk),
+                       ("failures.json", failures)):  # fmt: skip
+        with atomic_path(out / name) as tmp:
+            tmp.write_text(json.dumps(data, indent=1) + "\n")
+    from study.report import write_report
+
+    write_report(out, families, rows, brk, failures, quick=quick, seconds=seconds)
+    return {"rows": rows, "breakdown": brk, "failures": failures, "seconds": seconds,
+            "total_seconds": time.perf_counter() - start}  # fmt: skip

@@ -1,0 +1,136 @@
+"""The study's quick subset (rtlab study stiff --quick), run once with the real extension and a
+real Mitsuba: what rtlab must show, and that the textbook formulas break where theory says, so
+each assertion could fail either way."""
+
+from __future__ import annotations
+
+import itertools
+import json
+import re
+from fractions import Fraction
+
+import numpy as np
+import pytest
+
+from study import truth
+from study.shapes import Sphere
+from tracer.cli import main
+
+
+@pytest.fixture(scope="module")
+def quick(tmp_path_factory):
+    out = tmp_path_factory.mktemp("study")
+    assert main(["study", "stiff", "--quick", "--out", str(out)]) == 0
+    rows = json.loads((out / "rows.json").read_text())
+    return out, rows
+
+
+def value(rows, family, knob, method, metric):
+    (hit,) = [r for r in rows if (r["family"], r["knob_value"], r["method"], r["metric"])
+              == (family, knob, method, metric)]  # fmt: skip
+    return hit["value"]
+
+
+def test_rows_have_the_contract_fields(quick):
+    _, rows = quick
+    fields = {"family", "knob", "knob_value", "method", "version", "metric", "value", "rays",
+              "undecidable"}  # fmt: skip
+    assert rows and all(set(r) == fields for r in rows)
+    assert {r["method"] for r in rows} >= {
+        "rtlab",
+        "textbook-double",
+        "textbook-float",
+        "mitsuba-scalar_rgb",
+        "mitsuba-llvm_ad_rgb",
+    }
+    mitsuba = {r["version"] for r in rows if r["method"].startswith("mitsuba")}
+    import mitsuba as mi
+
+    assert mitsuba == {mi.__version__}
+
+
+def test_rtlab_decides_every_decidable_ray(quick):
+    _, rows = quick
+    for r in rows:
+        if r["method"] == "rtlab" and r["metric"] in ("wrong_decisions", "bound_violations",
+                                                      "nan_inf", "self_hits", "missed_far",
+                                                      "wrong_side", "false_occlusions",
+                                                      "scale_mismatches"):  # fmt: skip
+            assert r["value"] == 0, r
+
+
+def test_rtlab_t_within_a_few_ulps_where_roots_are_apart(quick):
+    _, rows = quick
+    for knob in (10.0, 1e5, 1e10):
+        # The stable roots cost a few roundings (Haines et al. 2019: error ~ u |f|, i.e. a few
+        # ulps of t ~ |f|); the truth rounded to the nearest double adds half an ulp: 4.
+        assert value(rows, "sphere-distance", knob, "rtlab", "t_error_ulps_max_separated") <= 4
+
+
+def test_the_textbook_quadratic_loses_digits_with_distance(quick):
+    _, rows = quick
+    near = value(rows, "sphere-distance", 10.0, "textbook-double", "t_error_ulps_max_separated")
+    far = value(rows, "sphere-distance", 1e10, "textbook-double", "t_error_ulps_max_separated")
+    assert far > 1e4 * max(near, 1)  # b^2 - 4ac's error grows with (|f| / r)^2
+    assert value(rows, "sphere-distance", 1e10, "textbook-double", "wrong_decisions") > 0.01
+
+
+def test_the_undecidable_band_is_measured_not_excused(quick):
+    _, rows = quick
+    (r,) = [r for r in rows if (r["family"], r["knob_value"], r["method"], r["metric"])
+            == ("grazing", 52.0, "rtlab", "wrong_decisions")]  # fmt: skip
+    assert r["undecidable"] > r["rays"] // 2  # a miss by one ulp of r: mostly undecidable
+    far = [r for r in rows if r["family"] == "grazing" and r["knob_value"] == 4.0]
+    assert all(r["undecidable"] == 0 for r in far)  # and nothing is excused far from it
+
+
+def test_fixed_epsilons_break_at_the_ends_of_the_scale(quick):
+    _, rows = quick
+    # In float, 1e-4 is below the rounding of points at 1e8 (ulp 8): the rays hit their surface.
+    assert value(rows, "self-intersection", 1e8, "textbook-float", "self_hits") > 0.1
+    # At 1e-8, 1e-4 jumps past the whole shape: the inward rays never reach the far side.
+    assert value(rows, "self-intersection", 1e-8, "textbook-double", "missed_far") > 0.1
+    assert value(rows, "self-intersection", 1e-8, "rtlab", "missed_far") == 0
+
+
+def test_float_methods_break_on_grazing_rays_long_before_double(quick):
+    _, rows = quick
+    assert value(rows, "grazing", 20.0, "textbook-float", "wrong_decisions") > 0.01
+    assert value(rows, "grazing", 20.0, "textbook-double", "wrong_decisions") == 0
+
+
+def test_breakdown_and_pages(quick):
+    out, _ = quick
+    brk = json.loads((out / "breakdown.json").read_text())
+    by = {(b["family"], b["method"]): b["breaks_at"] for b in brk}
+    assert by[("sphere-distance", "rtlab")] is None
+    assert by[("sphere-distance", "textbook-double")] == 1e5
+    html = (out / "index.html").read_text()
+    images = re.findall(r"<img [^>]*>", html)
+    assert len(images) == 5 and all(re.search(r'alt="[^"]{20,}"', i) for i in images)
+    for i in images:
+        src = re.search(r'src="([^"]+)"', i).group(1)
+        assert (out / src).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    levels = [int(h) for h in re.findall(r"<h([1-6])", html)]
+    assert levels[0] == 1 and all(b - a <= 1 for a, b in itertools.pairwise(levels))
+    assert "http" not in html  # offline: nothing fetched
+
+
+def test_truth_decides_an_exact_tangent_and_calls_it_undecidable():
+    s = Sphere((0.0, 0.0, 0.0), 1.0)
+    o, d = np.array([[1.0, 0.0, -5.0]]), np.array([[0.0, 0.0, 1.0]])
+    t = truth.truth(s, o, d)
+    assert t.hit[0] and t.t[0] == 5.0 and t.undecidable[0]  # D = 0 exactly; one ulp misses
+    inside = truth.truth(s, np.array([[0.5, 0.0, -5.0]]), d)
+    assert inside.hit[0] and not inside.undecidable[0]
+    assert truth.first_hit(s, o[0], d[0])[1] == Fraction(5)
+
+
+def test_unknown_family_and_out_file(tmp_path, capsys):
+    assert main(["study", "stiff", "--out", str(tmp_path), "--family", "grazin"]) == 2
+    assert "did you mean 'grazing'" in capsys.readouterr().err
+    f = tmp_path / "file"
+    f.write_text("x")
+    assert main(["study", "stiff", "--quick", "--out", str(f), "--family", "grazing"]) == 2
+    assert "is a file" in capsys.readouterr().err
+    assert f.read_text() == "x"
