@@ -31,6 +31,28 @@ def pytest_unconfigure(config: pytest.Config) -> None:
     _OWN_CACHE.clear()
 
 
+# Modules whose module-scoped fixtures cost many seconds (tests/reports: grades, a site, a
+# browser: 8 to 35 s each): under `--dist loadgroup` (the Makefile's) each runs whole on one
+# worker, so that its fixtures are set up once, not once per worker; every other test is its
+# own unit, handed to whichever worker is free (at most three waiting on each). pytest-xdist
+# 3.8's own loadgroup marks a group by renaming the test's nodeid, which pytest 9 no longer
+# lets it do (every test stays alone), so the units are given here, by module.
+GROUPED = ("tests/reports/",)
+
+
+def pytest_xdist_make_scheduler(config: pytest.Config, log: object) -> object | None:
+    if config.getvalue("dist") != "loadgroup":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class CostlyModulesWhole(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            module = nodeid.split("::", 1)[0]
+            return module if module.startswith(GROUPED) else nodeid
+
+    return CostlyModulesWhole(config, log)
+
+
 @pytest.fixture
 def tmp_scene(tmp_path):
     """Write TOML text to a file and return its path."""
