@@ -40,6 +40,7 @@ def pytest_unconfigure(config: pytest.Config) -> None:
 GROUPED = ("tests/reports/",)
 
 
+@pytest.hookimpl(optionalhook=True)  # pytest-xdist's hook: `-p no:xdist` runs have none
 def pytest_xdist_make_scheduler(config: pytest.Config, log: object) -> object | None:
     if config.getvalue("dist") != "loadgroup":
         return None
