@@ -65,8 +65,12 @@ format: setup
 	$(VENV)/bin/ruff format .
 	$(VENV)/bin/ruff check --fix .
 
+# Two workers or more (pytest-xdist, one per core): the grader's builds and renders leave a core
+# idle between them that the other worker's tests fill; loadgroup keeps each module of
+# tests/conftest.py's GROUPED on one worker (their fixtures set up once) and hands out the rest
+# one test at a time.
 test: setup lint
-	$(PY) -m pytest
+	$(PY) -m pytest -n auto --dist loadgroup
 
 # The core built with AddressSanitizer and UndefinedBehaviorSanitizer (CMake's RTLAB_SANITIZE,
 # in build/sanitize: .venv's own build is left alone), then the tests that exercise the core

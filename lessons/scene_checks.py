@@ -24,6 +24,7 @@ solution's image: the reference is theirs.
 
 from __future__ import annotations
 
+import fcntl
 import hashlib
 import importlib
 import json
@@ -247,11 +248,16 @@ def references(check: SceneCheck, render: bool = True) -> dict[str, np.ndarray]:
             raise FileNotFoundError(
                 f"{path}: no pre-rendered references for {check.lesson} {check.name}"
             )
-        images = render_references(check)
         path.parent.mkdir(parents=True, exist_ok=True)
-        partial = path.with_name(f".{path.stem}.{os.getpid()}.{secrets.token_hex(4)}.npz")
-        np.savez_compressed(partial, **images)
-        os.replace(partial, path)
+        # One process renders a scene's references; another that wants them meanwhile (the
+        # suite's two workers) waits for its file rather than rendering them beside it.
+        with open(path.with_name(f".{path.stem}.lock"), "w") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            if not path.exists():
+                images = render_references(check)
+                partial = path.with_name(f".{path.stem}.{os.getpid()}.{secrets.token_hex(4)}.npz")
+                np.savez_compressed(partial, **images)
+                os.replace(partial, path)
     with np.load(path, allow_pickle=False) as data:
         return {k: data[k] for k in data.files}
 
