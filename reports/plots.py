@@ -623,6 +623,11 @@ def precision(exponents: tuple[int, ...] = tuple(range(1, 11)), rays: int = 16) 
 # --- bounding volumes -----------------------------------------------------------------------
 
 
+def _count(x: float) -> str:
+    """A count for a sentence: 29,000 rather than 2.9e+04; three digits below 1000."""
+    return f"{x:,.0f}" if x >= 1000 else f"{x:.3g}"
+
+
 def bounding_volumes(width: int = 24, height: int = 18) -> Plot:
     """The Stanford bunny alone (reference/scenes/bunny.toml without its floor and lights: each
     ray the counters count is a primary ray) rendered once per acceleration mode."""
@@ -669,7 +674,7 @@ def bounding_volumes(width: int = 24, height: int = 18) -> Plot:
             fontsize=9,
             bbox={"fc": "white", "ec": "none", "pad": 1},
         )
-    ax.axhline(triangles, color="k", ls=":", lw=1, label=f"the mesh's {triangles} triangles")
+    ax.axhline(triangles, color="k", ls=":", lw=1, label=f"the mesh's {triangles:,} triangles")
     ax.set_yscale("log")
     ax.set_ylim(0.5, triangles * 300)
     ax.set_xticks(x, [r["mode"] for r in rows])
@@ -681,23 +686,23 @@ def bounding_volumes(width: int = 24, height: int = 18) -> Plot:
     saving = by["bounding_box"]["triangles_per_ray"] / max(by["bvh"]["triangles_per_ray"], 1e-300)
     alt = (
         f"Bar chart, log scale, of tests per primary ray on the Stanford bunny "
-        f"({triangles} triangles): with the hierarchy (bvh) a ray makes "
+        f"({triangles:,} triangles): with the hierarchy (bvh) a ray makes "
         f"{by['bvh']['boxes_per_ray']:.3g} box tests and {by['bvh']['triangles_per_ray']:.3g} "
         f"triangle tests in {by['bvh']['seconds']:.2g} s for the image; with one bounding box "
         f"{by['bounding_box']['boxes_per_ray']:.3g} box test and "
-        f"{by['bounding_box']['triangles_per_ray']:.3g} triangle tests in "
+        f"{_count(by['bounding_box']['triangles_per_ray'])} triangle tests in "
         f"{by['bounding_box']['seconds']:.2g} s; with none "
-        f"{by['none']['boxes_per_ray']:.3g} and {by['none']['triangles_per_ray']:.3g} in "
-        f"{by['none']['seconds']:.2g} s: the hierarchy tests {saving:.3g} times fewer "
+        f"{by['none']['boxes_per_ray']:.3g} and {_count(by['none']['triangles_per_ray'])} in "
+        f"{by['none']['seconds']:.2g} s: the hierarchy tests {_count(saving)} times fewer "
         f"triangles than the one box."
     )
     findings = [
-        f"The hierarchy tests {saving:.3g} times fewer triangles per ray than the one box "
+        f"The hierarchy tests {_count(saving)} times fewer triangles per ray than the one box "
         f"around the mesh, at the cost of {by['bvh']['boxes_per_ray']:.3g} box tests, and "
         f"traces the image {by['bounding_box']['seconds'] / by['bvh']['seconds']:.3g} times "
         f"faster.",
         f"One box around the mesh: a ray that misses it tests no triangle, one that enters it "
-        f"tests all {triangles}; {by['bounding_box']['triangles_per_ray'] / triangles:.1%} of "
+        f"tests all {triangles:,}; {by['bounding_box']['triangles_per_ray'] / triangles:.1%} of "
         f"the mesh per ray here, the share of the rays that enter the box.",
     ]
     if (by["none"]["box_tests"], by["none"]["primitive_tests"]) == (
