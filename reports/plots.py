@@ -118,7 +118,15 @@ def efficiency(rows: list[dict[str, Any]]) -> float:
 
 
 def _mitsuba_scene(scene: Any, sampler: dict[str, Any] | None = None) -> Any:
+    import gc
+
     import mitsuba as mi
+
+    # Scenes loaded before (rtlab's classic integrator and BSDFs are Python plugins, kept in
+    # reference cycles) are freed now, not by the cycle collector in the middle of a render,
+    # where Dr.Jit then finds a plugin instance gone ("callable 0 returned an
+    # empty/uninitialized Dr.Jit array", seen after other tests in the same process).
+    gc.collect()
 
     import converters.mitsuba as cm
 
@@ -130,11 +138,20 @@ def _mitsuba_scene(scene: Any, sampler: dict[str, Any] | None = None) -> Any:
 
 
 def _mitsuba_render(mi_scene: Any, spp: int, seed: int) -> tuple[np.ndarray, float]:
+    import gc
+
     import mitsuba as mi
 
-    start = time.perf_counter()
-    image = np.array(mi.render(mi_scene, spp=spp, seed=seed), dtype=np.float64)[..., :3]
-    return image, time.perf_counter() - start
+    # And no collection during the render either (see _mitsuba_scene).
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        start = time.perf_counter()
+        image = np.array(mi.render(mi_scene, spp=spp, seed=seed), dtype=np.float64)[..., :3]
+        return image, time.perf_counter() - start
+    finally:
+        if enabled:
+            gc.enable()
 
 
 @dataclass
