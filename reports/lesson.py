@@ -29,6 +29,7 @@ from lessons.catalog import Lesson, get_lesson
 from lessons.mistakes import Mistake, mistakes, write_mistake
 from lessons.probe import HIDDEN
 from lessons.scene_checks import SceneCheck, lesson_scenes, share_bound
+from reports.plots import Plot, lesson_plots
 
 ROOT = Path(__file__).resolve().parent.parent
 # Built extensions of the known-wrong versions, keyed by the digest of what goes into the
@@ -168,6 +169,7 @@ class LessonPage:
     mistake_seconds: float
     command: str
     made: str  # when, UTC
+    plots: list[Plot] = field(default_factory=list)  # reports/plots.py, measured by this run
 
     @property
     def rows(self) -> list[ComparisonRow]:
@@ -463,4 +465,5 @@ def build_lesson_page(lesson_id: str, *, mistake_cap: int = DEFAULT_MISTAKES,
         mistake_seconds=mistake_seconds,
         command=command,
         made=time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+        plots=lesson_plots(lesson.id),
     )

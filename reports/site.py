@@ -133,6 +133,12 @@ class Assets:
         save_image(path, np.asarray(image)[..., :3])
         return self._src(path)
 
+    def png(self, name: str, data: bytes) -> str:
+        """A PNG already drawn (a plot's, reports/plots.py)."""
+        path = self.directory / name
+        path.write_bytes(data)
+        return self._src(path)
+
     def heat_map(self, name: str, reference: np.ndarray, test: np.ndarray) -> str:
         from reference.metrics import heat_map
 
@@ -200,6 +206,7 @@ def render_lesson(page: LessonPage, directory: Path, *, inline: bool, index: boo
             entry["correct"] = assets.image(f"{stem}-correct.png", m.correct)
             entry["heat"] = assets.heat_map(f"{stem}-diff.png", m.correct, m.image)
         mistakes.append(entry)
+    plots = [{"plot": p, "src": assets.png(f"plot-{p.name}.png", p.png)} for p in page.plots]
     html = (
         environment()
         .get_template("lesson.html")
@@ -208,6 +215,7 @@ def render_lesson(page: LessonPage, directory: Path, *, inline: bool, index: boo
             text_html=markdown_html(page.text_markdown) if page.text_markdown else "",
             scenes=scenes,
             mistakes=mistakes,
+            plots=plots,
             scale=SCALE,
             index=index,
         )
