@@ -28,6 +28,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
             action="store_true",
             help="inline the images as data: URIs (a page to mail), no image files",
         )
+        if name == "course":
+            p.add_argument(
+                "--study",
+                choices=("none", "quick", "full"),
+                default="none",
+                help="also the stiff study (rtlab study stiff) in OUT/study/, linked from the "
+                "precision lesson: quick takes about 40 s, full much longer (default none)",
+            )
         p.add_argument(
             "--mistakes",
             type=int,
@@ -82,6 +90,7 @@ def run(args: argparse.Namespace) -> int:
             inline=args.single_file,
             command=command,
             progress=lambda line: print(f"rtlab: {line}", file=sys.stderr),
+            study=args.study,
         )
         print(f"rtlab: wrote {path} and the pages of {len(LESSONS)} lessons")
         return 0

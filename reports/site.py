@@ -184,9 +184,16 @@ def _jsonable(value: Any) -> Any:
     return plain(value)
 
 
-def render_lesson(page: LessonPage, directory: Path, *, inline: bool, index: bool) -> Path:
+# The lesson whose page links to the stiff study (study/, `rtlab study stiff`): the study is
+# the precision lesson's report (issue 11).
+STUDY_LESSON = "L13"
+
+
+def render_lesson(page: LessonPage, directory: Path, *, inline: bool, index: bool,
+                  study: str = "") -> Path:  # fmt: skip
     """Write ``directory/index.html`` (and its images, and metrics.json: the comparison rows
-    the page shows) for one lesson; ``index``: the page links to the course's index."""
+    the page shows) for one lesson; ``index``: the page links to the course's index;
+    ``study``: the stiff study's page, relative to this one, where the site has it."""
     directory.mkdir(parents=True, exist_ok=True)
     assets = Assets(directory, inline)
     scenes = []
@@ -218,6 +225,8 @@ def render_lesson(page: LessonPage, directory: Path, *, inline: bool, index: boo
             plots=plots,
             scale=SCALE,
             index=index,
+            study=study,
+            study_lesson=STUDY_LESSON,
         )
     )
     (directory / "index.html").write_text(html)
@@ -277,16 +286,27 @@ def write_course_site(
     inline: bool = False,
     command: str = "",
     progress: Callable[[str], None] = lambda line: None,
+    study: str = "none",
 ) -> Path:
-    """Every lesson's page and the index, the whole of ``out`` replaced at the end."""
+    """Every lesson's page and the index, the whole of ``out`` replaced at the end;
+    ``study`` ("quick" or "full"): the stiff study too (study/run.py), in ``out/study/``,
+    linked from the precision lesson's page."""
     import time
 
     start = time.perf_counter()
     with staged(Path(out)) as stage:
+        link = ""
+        if study != "none":
+            from study.run import run as run_study
+
+            summary = run_study(stage / "study", quick=study == "quick")
+            link = "../study/index.html"
+            progress(f"study: {len(summary['rows'])} rows in {summary['total_seconds']:.1f} s")
         pages = []
         for lesson_id in lesson_ids:
             page = build(lesson_id)
-            render_lesson(page, stage / lesson_id, inline=inline, index=True)
+            render_lesson(page, stage / lesson_id, inline=inline, index=True,
+                          study=link if lesson_id == STUDY_LESSON else "")  # fmt: skip
             pages.append(page)
             progress(f"{lesson_id}: {len(page.scenes)} scenes, "
                      f"{len(page.mistakes_shown)} known-wrong versions rendered")  # fmt: skip

@@ -14,13 +14,29 @@ import pytest
 
 from study import truth
 from study.shapes import Sphere
+from tests.reports.test_pages import browser
 from tracer.cli import main
+
+__all__ = ["browser"]  # the fixture, shared with tests/reports/test_pages.py
 
 
 @pytest.fixture(scope="module")
-def quick(tmp_path_factory):
-    out = tmp_path_factory.mktemp("study")
-    assert main(["study", "stiff", "--quick", "--out", str(out)]) == 0
+def site(tmp_path_factory):
+    """The quick study as the course site makes it (`rtlab report course --study quick`), in
+    site/study/, with the precision lesson's page that links to it (no known-wrong versions:
+    their pages are tests/reports/'s)."""
+    from reports.lesson import build_lesson_page
+    from reports.site import write_course_site
+
+    out = tmp_path_factory.mktemp("site") / "site"
+    write_course_site(out, lambda i: build_lesson_page(i, mistake_cap=0, command="tests/study"),
+                      ["L13"], command="tests/study", study="quick")  # fmt: skip
+    return out
+
+
+@pytest.fixture(scope="module")
+def quick(site):
+    out = site / "study"
     rows = json.loads((out / "rows.json").read_text())
     return out, rows
 
@@ -134,3 +150,24 @@ def test_unknown_family_and_out_file(tmp_path, capsys):
     assert main(["study", "stiff", "--quick", "--out", str(f), "--family", "grazing"]) == 2
     assert "is a file" in capsys.readouterr().err
     assert f.read_text() == "x"
+
+
+def test_the_precision_lesson_links_to_the_study(site, browser):
+    from tests.reports.test_pages import assert_offline_and_whole, images_of, open_page
+
+    page, requests, errors = open_page(browser, site / "L13" / "index.html")
+    assert_offline_and_whole(page, requests, errors, site)
+    link = page.locator("#study a")
+    assert link.get_attribute("href") == "../study/index.html"
+    link.click()
+    page.wait_for_load_state("load")
+    assert page.url == (site / "study" / "index.html").resolve().as_uri()
+    assert_offline_and_whole(page, requests, errors, site)
+    assert len(images_of(page)) == 5  # a plot per family, each loaded with its alt text
+
+
+def test_the_verb_writes_one_family(tmp_path, capsys):
+    assert main(["study", "stiff", "--quick", "--family", "scaling", "--out", str(tmp_path)]) == 0
+    assert "rtlab failed on 0 kept rays" in capsys.readouterr().out
+    rows = json.loads((tmp_path / "rows.json").read_text())
+    assert rows and {r["family"] for r in rows} == {"scaling"}
