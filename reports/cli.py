@@ -40,8 +40,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
             "--mistakes",
             type=int,
             default=DEFAULT_MISTAKES,
-            help=f"known-wrong versions built and shown per lesson (default {DEFAULT_MISTAKES};"
-            " each costs a build of about 4 s unless cached in build/report-mistakes)",
+            help="known-wrong versions built and shown per lesson (default: every one; each "
+            "costs a build of about 4 s unless cached in build/report-mistakes)",
         )
     p = sub.add_parser("class", help="an instructor's page over many results.json: OUT/index.html")
     p.add_argument("grades", help="a directory of results.json files, e.g. grades/<student>/")
@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
             return 2
         print(f"rtlab: wrote {path} and its score histogram")
         return 0
-    if args.mistakes < 0:
+    if args.mistakes is not None and args.mistakes < 0:
         print("rtlab: error: --mistakes: expected 0 or more", file=sys.stderr)
         return 2
     try:

@@ -18,6 +18,7 @@ import os
 import shutil
 import tempfile
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -36,9 +37,10 @@ ROOT = Path(__file__).resolve().parent.parent
 # build (the core's sources with the edit, the support header, the compiler flags): a build
 # takes 3.5 s (lessons/sandbox.py), a render of a lesson's scenes a few tenths of one.
 MISTAKE_CACHE = ROOT / "build" / "report-mistakes"
-# How many known-wrong versions a page builds and shows by default (`--mistakes`): each costs
-# a build when not cached; the others are listed with their description and concept.
-DEFAULT_MISTAKES = 3
+# How many known-wrong versions a page builds and shows (`--mistakes N`; by default every one,
+# as "what the mistake looks like" asks): each costs a build when not cached (two at a time,
+# one per core); those over a cap are listed with their description and concept.
+DEFAULT_MISTAKES: int | None = None
 # A known-wrong version "changes the picture" where a pixel of a scene differs from the
 # correct image by more than the tolerance the references are held to against rtlab
 # (MITSUBA_TOLERANCE, 1e-4): a smaller change is not one the scene checks could see.
@@ -402,10 +404,10 @@ def show_mistake(mistake: Mistake, scenes: list[ScenePage]) -> MistakeShown:
 
 
 def choose_mistakes(
-    lesson: str, cap: int, scenes: list[ScenePage]
+    lesson: str, cap: int | None, scenes: list[ScenePage]
 ) -> tuple[list[Mistake], list[Mistake]]:
-    """At most ``cap`` to build: those whose concept a scene of the lesson checks first (their
-    picture most likely changes), in file order; the rest are listed."""
+    """At most ``cap`` (None: all) to build: those whose concept a scene of the lesson checks
+    first (their picture most likely changes), in file order; the rest are listed."""
     found = mistakes(lesson)
     if not scenes:
         return [], found
@@ -442,7 +444,7 @@ def probe_concepts(lesson: Lesson) -> list[ProbeConcept]:
     ]
 
 
-def build_lesson_page(lesson_id: str, *, mistake_cap: int = DEFAULT_MISTAKES,
+def build_lesson_page(lesson_id: str, *, mistake_cap: int | None = DEFAULT_MISTAKES,
                       command: str = "") -> LessonPage:  # fmt: skip
     lesson = get_lesson(lesson_id)
     title, text = lesson_text(lesson)
@@ -451,7 +453,9 @@ def build_lesson_page(lesson_id: str, *, mistake_cap: int = DEFAULT_MISTAKES,
     scene_seconds = time.perf_counter() - start
     chosen, listed = choose_mistakes(lesson.id, mistake_cap, scenes)
     start = time.perf_counter()
-    shown = [show_mistake(m, scenes) for m in chosen]
+    # Each known-wrong version builds and renders in child processes: one per core at once.
+    with ThreadPoolExecutor(max_workers=max(1, os.cpu_count() or 1)) as pool:
+        shown = list(pool.map(lambda m: show_mistake(m, scenes), chosen))
     mistake_seconds = time.perf_counter() - start
     return LessonPage(
         lesson=lesson,
