@@ -89,8 +89,14 @@ struct Mesh : Object {
         nodes.emplace_back();
         if (acceleration == Acceleration::bvh)
             build_node(0, 0, int(order.size()), 0, boxes, centres);
-        else { // one box around everything, one leaf of all triangles
-            for (const AABB &b : boxes) nodes[0].bounds.extend(b);
+        else { // one leaf of all triangles
+            if (acceleration == Acceleration::bounding_box) // in one box around everything
+                for (const AABB &b : boxes) nodes[0].bounds.extend(b);
+            else // none: in a box that is all of space, so the root's one slab test passes
+                 // for every ray (no 0 * infinity: no plane is finite) and every ray tests
+                 // every triangle, the slide's starting point before any bounding volume
+                nodes[0].bounds = AABB{{-infinity, -infinity, -infinity},
+                                       {infinity, infinity, infinity}};
             nodes[0].first = 0;
             nodes[0].count = int(order.size());
         }
