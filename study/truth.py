@@ -137,7 +137,11 @@ def _mesh1(me: Mesh, o: Vec, d: Vec, tmax: float) -> tuple[bool, object]:
     # The nearest of the triangles' exact hits: a ray through a shared edge or vertex meets
     # every triangle around it there (edges count as each triangle's), at the same t.
     best: Fraction | None = None
+    od = np.array([float(x) for x in o]), np.array([float(x) for x in d])
     for tr in me.triangles():
+        # Integer arithmetic first (the same decision, exact), Fractions for the hits' t.
+        if tmax == math.inf and not _triangle_hits([tr.a, tr.b, tr.c], *od):
+            continue
         h, t = _triangle1(tr, o, d, tmax)
         if h and (best is None or t < best):
             best = t
@@ -344,6 +348,41 @@ _RAY_MOVES = [tuple(1 if (m >> k) & 1 else -1 for k in range(6)) for m in range(
 _VERTEX_MOVES = [tuple(1 if (m >> k) & 1 else -1 for k in range(3)) for m in range(8)]
 
 
+def _ulp_norm(v: npt.ArrayLike) -> mpmath.mpf:
+    return mpmath.mpf(float(np.linalg.norm(np.spacing(np.abs(np.asarray(v, dtype=np.float64))))))
+
+
+def _near_boundary(tr: Triangle, o: np.ndarray, d: np.ndarray) -> bool:
+    """Whether the ray's line passes within one ulp move of the triangle's boundary: for some
+    edge, the distance between the line and the edge (a segment; for a zero-area triangle its
+    edges are all there is) is at most what moving each component of o, of d and of the
+    vertices by one ulp can shift them there (|ulp(o)| + |t| |ulp(d)| + max |ulp(vertex)|,
+    at the closest points; at DIGITS digits). The worst case of those moves, where the sign
+    patterns below only sample: a ray aimed at a sliver's sharp vertex slips into its wedge
+    only in a direction no pattern takes."""
+    om, dm = _m(o), _m(d)
+    verts = [_m(v) for v in (tr.a, tr.b, tr.c)]
+    du, ou = _ulp_norm(d), _ulp_norm(o)
+    vu = max(_ulp_norm(v) for v in (tr.a, tr.b, tr.c))
+    a = _mdot(dm, dm)
+    for j in range(3):
+        p, q = verts[j], verts[(j + 1) % 3]
+        e = [qi - pi for pi, qi in zip(p, q, strict=True)]
+        w0 = [oi - pi for oi, pi in zip(om, p, strict=True)]
+        b, c = _mdot(dm, e), _mdot(e, e)
+        dd, ee = _mdot(dm, w0), _mdot(e, w0)
+        den = a * c - b * b
+        candidates = [mpmath.mpf(0), mpmath.mpf(1)]
+        if den > 0:
+            candidates.append(min(max((a * ee - b * dd) / den, mpmath.mpf(0)), mpmath.mpf(1)))
+        for sv in candidates:
+            t = (b * sv - dd) / a  # the line's closest point to P + s e
+            gap = [w0[k] + t * dm[k] - sv * e[k] for k in range(3)]
+            if mpmath.sqrt(_mdot(gap, gap)) <= ou + abs(t) * du + vu:
+                return True
+    return False
+
+
 def _triangle_undecidable(tr: Triangle, o: np.ndarray, d: np.ndarray, hit: bool) -> bool:
     """A triangle's conditioning. A ray near an edge or a vertex, or nearly in the plane, gets
     every one-ulp move of its six components (64) and of each vertex alone (3 x 8): the
@@ -359,6 +398,8 @@ def _triangle_undecidable(tr: Triangle, o: np.ndarray, d: np.ndarray, hit: bool)
         size = np.linalg.norm(rel[j]) * np.linalg.norm(rel[k]) * np.linalg.norm(d)
         # "Near": within 1e-6 of its largest possible size (a margin: it only costs moves).
         near = near or not abs(w) > 1e-6 * size
+    if near and _near_boundary(tr, o, d):
+        return True
     moves = _RAY_MOVES if near else list(PERTURBATIONS)
     for signs in moves:
         po, pd = perturbed(o, d, signs)
@@ -462,6 +503,18 @@ def side(shape: Shape, p: npt.ArrayLike) -> int:
 def within_bound(shape: Shape, p: npt.ArrayLike, err: npt.ArrayLike) -> bool:
     """Whether the box p +- err (a hit point and its error bound) holds a point of the true
     surface, exactly: the promise offset_ray_origin() relies on."""
+    if isinstance(shape, Mesh):
+        # Some triangle's plane passes through the box (a plane, not the triangle itself: a
+        # weaker check, enough to catch a point refined off its surface).
+        q, e = np.asarray(p, dtype=np.float64), np.asarray(err, dtype=np.float64)
+        for tr in shape.triangles():
+            v = np.array([tr.a, tr.b, tr.c])
+            # Only triangles whose bounds (widened by the box and a relative 1e-12) reach it.
+            pad = e + 1e-12 * (np.abs(q) + np.abs(v).max(axis=0))
+            reach = np.all(v.min(axis=0) - pad <= q) and np.all(q <= v.max(axis=0) + pad)
+            if reach and within_bound(tr, p, err):
+                return True
+        return False
     q, e = _v(p), _v(err)
     lo = (q[0] - e[0], q[1] - e[1], q[2] - e[2])
     hi = (q[0] + e[0], q[1] + e[1], q[2] + e[2])
