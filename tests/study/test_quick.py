@@ -253,6 +253,14 @@ def test_float_methods_break_on_triangles_where_double_does_not(quick):
     for knob in (0.0, 1e-8, 1e-2):
         assert value(rows, "slivers", knob, "rtlab", "wrong_decisions") == 0
         assert value(rows, "slivers", knob, "textbook-double", "wrong_decisions") == 0
+    # Zero-area triangles: half the rays pass beside the segment (decidable misses). rtlab
+    # never reports a hit on one, even on the rays through the segment (det == 0 exactly);
+    # rounded to float the vertices are no longer collinear, and the float formula hits some.
+    (zero,) = [r for r in rows if (r["family"], r["knob_value"], r["method"], r["metric"])
+               == ("slivers", 0.0, "rtlab", "wrong_decisions")]  # fmt: skip
+    assert 0 < zero["undecidable"] < zero["rays"]
+    assert value(rows, "slivers", 0.0, "rtlab", "undecidable_differs") == 0
+    assert value(rows, "slivers", 0.0, "textbook-float", "wrong_decisions") > 0.005
 
 
 def test_no_leak_through_a_closed_mesh_up_to_1e8(quick):
