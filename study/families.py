@@ -7,11 +7,12 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from fractions import Fraction
 
 import numpy as np
 import numpy.typing as npt
 
-from study.shapes import Box, Plane, Shape, Sphere, Triangle
+from study.shapes import Box, Mesh, Plane, Shape, Sphere, Triangle, Vec, as_mesh
 
 Array = npt.NDArray[np.float64]
 
@@ -284,3 +285,244 @@ FAMILIES: dict[str, Family] = {
         ),
     )
 }
+
+
+# ----------------------------------------------------------- (f) triangles, slivers, meshes
+# The rays aimed at a point p of a triangle (a vertex, a point of an edge: exact rationals) get
+# d = p - o computed exactly and then rounded: the ray as a renderer would be given it.
+
+
+def _aim(o: Array, targets: list[tuple[Fraction, Fraction, Fraction]]) -> Array:
+    """Directions from each origin (doubles) to each exact target, rounded once."""
+    return np.array([[float(p[k] - Fraction(float(o[i, k]))) for k in range(3)]
+                     for i, p in enumerate(targets)])  # fmt: skip
+
+
+def _on_edge(a: Vec, b: Vec, s: Fraction) -> tuple[Fraction, Fraction, Fraction]:
+    return tuple(Fraction(a[k]) + s * (Fraction(b[k]) - Fraction(a[k])) for k in range(3))  # type: ignore[return-value]
+
+
+def _triangle_rays(tri: Triangle, k: int, size: float, rng: np.random.Generator,
+                   grazing: bool = True) -> tuple[Array, Array]:  # fmt: skip
+    """k rays at a triangle: 40% at random interior points, 20% exactly at a vertex, 30%
+    exactly at a point of an edge, 10% nearly in its plane (10^-1 .. 10^-15 radians off it)."""
+    verts = [tri.a, tri.b, tri.c]
+    v = np.array(verts)
+    ng = np.cross(v[1] - v[0], v[2] - v[0])
+    norm = np.linalg.norm(ng)
+    ng = ng / norm if norm > 0 else _units(rng, 1)[0]
+    o = v.mean(axis=0) + _units(rng, k) * (size * 10.0 ** rng.uniform(0, 2, k))[:, None]
+    targets: list = []
+    kinds = rng.choice(4, size=k, p=[0.4, 0.2, 0.3, 0.1] if grazing else [0.45, 0.2, 0.35, 0.0])
+    for i, kind in enumerate(kinds):
+        if kind == 0:
+            w = rng.dirichlet([1, 1, 1])
+            targets.append(tuple(Fraction(float(x)) for x in w @ v))
+        elif kind == 1:
+            targets.append(tuple(Fraction(x) for x in verts[rng.integers(3)]))
+        elif kind == 2:
+            j = int(rng.integers(3))
+            s = Fraction(int(rng.integers(1, 1024)), 1024)
+            targets.append(_on_edge(verts[j], verts[(j + 1) % 3], s))
+        else:
+            w = rng.dirichlet([1, 1, 1])
+            q = w @ v
+            inplane = _perp(ng[None, :], rng)[0]
+            dd = inplane + ng * 10.0 ** -rng.uniform(1, 15) * rng.choice([-1, 1])
+            o[i] = q - dd * size * 10.0 ** rng.uniform(0, 2)
+            targets.append(tuple(Fraction(float(x)) for x in q))
+    return o, _aim(o, targets)
+
+
+def triangles(knob: float, n: int, rng: np.random.Generator) -> list[Case]:
+    """Triangles at ``knob`` from the origin (size knob 10^-4 .. 1, at least 1e-3), rays at
+    their interior, exactly at vertices and edges, and nearly in their plane."""
+    cases = []
+    for _ in range(4):
+        centre = _units(rng, 1)[0] * knob
+        size = max(knob * 10.0 ** -rng.uniform(0, 4), 1e-3)
+        verts = [tuple(_f32(x) for x in centre + size * u) for u in _units(rng, 3)]
+        tri = Triangle(*verts)  # type: ignore[arg-type]
+        o, d = _triangle_rays(tri, n // 8, size, rng)
+        cases.append(Case(tri, o, d))
+    return cases
+
+
+def slivers(knob: float, n: int, rng: np.random.Generator) -> list[Case]:
+    """Slivers of aspect ``knob`` (height / base; 0: zero-area, three collinear vertices or two
+    coinciding): rays at their interior, vertices and edges. Coordinates are dyadic (a few
+    bits) so that the collinear ones are exactly collinear."""
+    cases = []
+    for j in range(4):
+        base = 2.0 ** int(rng.integers(-4, 5))
+        a = np.array([float(int(rng.integers(-64, 64))) * base / 8 for _ in range(3)])
+        u = _units(rng, 1)[0]
+        e = np.array([float(np.float32(x)) for x in u]) * base * 4  # exact sums with a
+        b = a + e
+        if knob == 0:
+            c = a + e * 0.375 if j % 2 == 0 else a.copy()
+        else:
+            h = _perp(u[None, :], rng)[0]
+            c = a + e * rng.uniform(0, 1) + h * (knob * base * 4)
+        tri = Triangle(tuple(a), tuple(b), tuple(c))  # type: ignore[arg-type]
+        o, d = _triangle_rays(tri, n // 8, base * 4, rng, grazing=False)
+        if knob == 0:
+            # Every ray above passes through the segment (undecidable: a one-ulp move of a
+            # vertex gives it an area); half of them are moved off it by 10^-3 .. 10^-12 of its
+            # length, sideways: decidable misses, a hit reported there is wrong.
+            half = np.arange(len(d)) % 2 == 0
+            side = np.cross(d, e)
+            side /= np.linalg.norm(side, axis=1)[:, None]
+            off = (base * 4 * 10.0 ** -rng.uniform(3, 12, len(d)))[:, None]
+            d = np.where(half[:, None], d + side * off, d)
+        cases.append(Case(tri, o, d))
+    return cases
+
+
+def icosahedron(radius: float, centre: Array) -> Mesh:
+    """A closed icosahedron (12 vertices, 20 faces counter-clockwise from outside)."""
+    g = (1 + math.sqrt(5)) / 2
+    raw = [(-1, g, 0), (1, g, 0), (-1, -g, 0), (1, -g, 0), (0, -1, g), (0, 1, g), (0, -1, -g),
+           (0, 1, -g), (g, 0, -1), (g, 0, 1), (-g, 0, -1), (-g, 0, 1)]  # fmt: skip
+    s = radius / math.sqrt(1 + g * g)
+    verts = tuple(tuple(float(centre[k] + s * p[k]) for k in range(3)) for p in raw)
+    faces = ((0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4),
+             (11, 10, 2), (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8),
+             (3, 8, 9), (4, 9, 5), (2, 4, 11), (6, 2, 10), (8, 6, 7), (9, 8, 1))  # fmt: skip
+    return Mesh(verts, faces)  # type: ignore[arg-type]
+
+
+def _rotated_cube(size: float, centre: Array, rng: np.random.Generator) -> Mesh:
+    q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    cube = as_mesh(Box((-size, -size, -size), (size, size, size)))
+    verts = tuple(tuple(float(x) for x in centre + q @ np.array(v)) for v in cube.vertices)
+    return Mesh(verts, cube.faces)  # type: ignore[arg-type]
+
+
+def _into(mesh: Mesh, faces: list[int], rng: np.random.Generator) -> Array:
+    """A unit vector u with u . n > 0.2 for each of the faces' outward normals: a ray coming
+    from p + u L towards p on those faces enters the (convex) solid there."""
+    v = np.array(mesh.vertices)
+    ns = []
+    for f in faces:
+        a, b, c = (v[i] for i in mesh.faces[f])
+        nn = np.cross(b - a, c - a)
+        ns.append(nn / np.linalg.norm(nn))
+    mean = np.mean(ns, axis=0)
+    mean /= np.linalg.norm(mean)
+    while True:
+        u = mean + 0.6 * _units(rng, 1)[0]
+        u /= np.linalg.norm(u)
+        if all(u @ nn > 0.2 for nn in ns):
+            return u
+
+
+def mesh_leaks(knob: float, n: int, rng: np.random.Generator) -> list[Case]:
+    """A closed icosahedron and a rotated cube of radius 1 at ``knob`` from the origin (their
+    vertices in double: a float method rounds them, which is part of its error), rays aimed
+    exactly through their vertices and edges from directions that enter the solid there: the
+    truth is a hit, a miss is a leak."""
+    cases = []
+    for j in range(2):
+        centre = _units(rng, 1)[0] * knob
+        mesh = icosahedron(1.0, centre) if j == 0 else _rotated_cube(0.5, centre, rng)
+        k = n // 8
+        targets, o = [], np.zeros((k, 3))
+        for i in range(k):
+            f = int(rng.integers(len(mesh.faces)))
+            face = mesh.faces[f]
+            if i % 2 == 0:  # a vertex: every face around it
+                vi = face[int(rng.integers(3))]
+                p = tuple(Fraction(x) for x in mesh.vertices[vi])
+                around = [g for g, fc in enumerate(mesh.faces) if vi in fc]
+            else:  # a point of an edge: its two faces
+                e = int(rng.integers(3))
+                a, b = face[e], face[(e + 1) % 3]
+                p = _on_edge(mesh.vertices[a], mesh.vertices[b],
+                             Fraction(int(rng.integers(1, 1024)), 1024))  # fmt: skip
+                around = [g for g, fc in enumerate(mesh.faces) if a in fc and b in fc]
+            u = _into(mesh, around, rng)
+            o[i] = np.array([float(x) for x in p]) + u * 10.0 ** rng.uniform(0.3, 1.3)
+            targets.append(p)
+        cases.append(Case(mesh, o, _aim(o, targets)))
+    return cases
+
+
+# ------------------------------------------------------------------------------- (g) boxes
+
+
+def boxes(knob: float, n: int, rng: np.random.Generator) -> list[Case]:
+    """Axis-aligned boxes at coordinate scale ``knob``: rays with +-0.0 direction components
+    (origins inside a slab, or exactly on a face's plane), origins exactly on a face, rays
+    exactly through edges and corners from directions entering the box there."""
+    cases = []
+    for _ in range(2):
+        centre = rng.uniform(-1, 1, 3) * knob
+        half = knob * 10.0 ** rng.uniform(-2, 0, 3)
+        lo = tuple(_f32(x) for x in centre - half)
+        hi = tuple(_f32(x) for x in centre + half)
+        box = Box(lo, hi)  # type: ignore[arg-type]
+        lo_a, hi_a = np.array(lo), np.array(hi)
+        k = n // 4
+        o = np.zeros((k, 3))
+        targets: list = []
+        for i in range(k):
+            kind = i % 4
+            inside = lo_a + (hi_a - lo_a) * rng.uniform(0.05, 0.95, 3)
+            if kind in (0, 1):
+                # Zero components (their signs random): 0, the origin strictly inside those
+                # slabs; 1, exactly on one of their face planes.
+                zeros = rng.choice(3, size=int(rng.integers(1, 3)), replace=False)
+                d = _units(rng, 1)[0]
+                d[zeros] = rng.choice([0.0, -0.0], size=len(zeros))
+                start = inside - d * (hi_a - lo_a).max() * 3
+                start[zeros] = inside[zeros]
+                if kind == 1:
+                    z = zeros[0]
+                    start[z] = lo_a[z] if rng.integers(2) else hi_a[z]
+                o[i] = start
+                targets.append(None)
+                cases_d = d
+            elif kind == 2:
+                # The origin exactly on a face, the direction random (into or out of the box).
+                ax = int(rng.integers(3))
+                start = inside.copy()
+                start[ax] = lo_a[ax] if rng.integers(2) else hi_a[ax]
+                o[i] = start
+                cases_d = _units(rng, 1)[0]
+                targets.append(None)
+            else:
+                # Exactly through a corner or a point of an edge, entering the box there.
+                corner = np.where(rng.integers(0, 2, 3) > 0, hi_a, lo_a)
+                p = [Fraction(float(x)) for x in corner]
+                if rng.integers(2):  # an edge: one coordinate free
+                    ax = int(rng.integers(3))
+                    p[ax] = Fraction(float(inside[ax]))
+                out = np.where(corner == hi_a, 1.0, -1.0)
+                u = out * rng.uniform(0.2, 1, 3)
+                u /= np.linalg.norm(u)
+                o[i] = np.array([float(x) for x in p]) + u * (hi_a - lo_a).max() * 2
+                targets.append(tuple(p))
+                cases_d = None
+            if targets[-1] is None:
+                targets[-1] = cases_d
+        d = np.array([_aim(o[i : i + 1], [t])[0] if isinstance(t, tuple) else t
+                      for i, t in enumerate(targets)])  # fmt: skip
+        cases.append(Case(box, o, d))
+    return cases
+
+
+FAMILIES.update({
+    f.name: f
+    for f in (
+        Family("triangles", "distance from the origin", tuple(10.0**e for e in range(0, 9)),
+               (1.0, 1e4, 1e8), ("triangle",), triangles),
+        Family("slivers", "aspect (height / base; 0: zero area)",
+               (0.0, *(10.0**-e for e in range(8, -1, -1))), (0.0, 1e-8, 1e-2),
+               ("triangle",), slivers, stiffer="down"),
+        Family("mesh-leaks", "distance / mesh radius", tuple(10.0**e for e in range(0, 9)),
+               (1.0, 1e4, 1e8), ("mesh",), mesh_leaks, "leaks"),
+        Family("boxes", "coordinate scale", tuple(10.0**e for e in range(-8, 9)),
+               (1e-8, 1.0, 1e8), ("box",), boxes, stiffer="both"),
+    )
+})  # fmt: skip

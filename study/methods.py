@@ -11,7 +11,11 @@ one, the normal), ``spawn`` (where a ray leaving a hit towards a direction start
   rays. The float one rounds the scene and the rays to float32 first, as a float renderer does:
   that rounding is part of its error (it is judged on the double rays, like every method).
 - ``mitsuba-scalar_rgb`` / ``mitsuba-llvm_ad_rgb``: mi.Scene.ray_intersect on the same rays
-  (spheres this session), version mi.__version__.
+  (spheres; triangles, meshes and boxes as an mi.Mesh of their triangles), version
+  mi.__version__.
+- ``embree`` / ``embree-robust``: Embree's rtcIntersect1 through embreex (its EmbreeScene's
+  ``robust`` flag sets RTC_SCENE_FLAG_ROBUST), triangles, meshes and boxes as triangles in
+  float, version "embreex X / Embree Y".
 """
 
 from __future__ import annotations
@@ -24,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from study.shapes import Plane, Shape, Sphere, Triangle
+from study.shapes import Mesh, Plane, Shape, Sphere, Triangle, as_mesh
 
 Array = npt.NDArray[np.float64]
 #: The textbook's fixed offset for spawned rays (the 1e-4 of countless course tracers).
@@ -49,6 +53,9 @@ class Method:
     spawn: Callable[[Traced, Array], Array]
     occluded: Callable[[Shape, Array, Array, Array], npt.NDArray[np.bool_]]
     precision: str  # "double" or "float"
+    #: The case protocols (study/families.py) it is measured on: first hits only where spawn and
+    #: occluded are not written for it.
+    protocols: frozenset[str] = frozenset({"decision", "spawn", "shadow", "scale"})
 
 
 # ------------------------------------------------------------------------------------ rtlab
@@ -59,7 +66,10 @@ def _core_scene(shape: Shape) -> object:
     import tracer
     from tracer.render import to_core
 
-    obj = shape.scene_object() | {"material": "m"}
+    # A triangle as a one-triangle mesh: the scene language refuses a zero-area "triangle", a
+    # mesh's face it keeps (the same flat-mesh code path, tracer/render.py).
+    described = as_mesh(shape) if isinstance(shape, Triangle) else shape
+    obj = described.scene_object() | {"material": "m"}
     scene = tracer.load_scene(
         {
             "camera": {
@@ -103,8 +113,21 @@ def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
 
 
+def _nearest(parts: list[Traced]) -> Traced:
+    """The nearest hit of each ray over the parts (a mesh's triangles)."""
+    ts = np.stack([p.t for p in parts])
+    k = np.argmin(ts, axis=0)
+    rows = np.arange(ts.shape[1])
+    pick = np.stack([p.p for p in parts])[k, rows]
+    nn = np.stack([p.n for p in parts])[k, rows]
+    t = ts[k, rows]
+    return Traced(np.isfinite(t), t, pick, None, nn)
+
+
 def _textbook(dtype: type) -> Callable[[Shape, Array, Array], Traced]:
     def trace(shape: Shape, o_in: Array, d_in: Array) -> Traced:
+        if isinstance(shape, Mesh):
+            return _nearest([trace(tr, o_in, d_in) for tr in shape.triangles()])
         o, d = o_in.astype(dtype), d_in.astype(dtype)
         with np.errstate(all="ignore"):
             if isinstance(shape, Sphere):
@@ -202,15 +225,28 @@ def _mitsuba(variant: str) -> object:
 
 
 @functools.lru_cache(maxsize=32)
-def _mi_scene(variant: str, shape: Sphere) -> object:
+def _mi_scene(variant: str, shape: Shape) -> object:
     mi = _mitsuba(variant)
     mi.set_variant(variant)
-    return mi.load_dict(
-        {
-            "type": "scene",
-            "s": {"type": "sphere", "center": list(shape.center), "radius": shape.radius},
-        }
-    )
+    if isinstance(shape, Sphere):
+        return mi.load_dict(
+            {
+                "type": "scene",
+                "s": {"type": "sphere", "center": list(shape.center), "radius": shape.radius},
+            }
+        )
+    # Triangles: an mi.Mesh filled through traverse() (Mitsuba keeps vertices in float32).
+    mesh = as_mesh(shape)  # type: ignore[arg-type]
+    v = np.asarray(mesh.vertices, dtype=np.float32).ravel()
+    f = np.asarray(mesh.faces, dtype=np.uint32).ravel()
+    m = mi.Mesh("m", vertex_count=len(mesh.vertices), face_count=len(mesh.faces),
+                has_vertex_normals=False, has_vertex_texcoords=False)  # fmt: skip
+    params = mi.traverse(m)
+    scalar = variant.startswith("scalar")
+    params["vertex_positions"] = v.tolist() if scalar else mi.Float(v)
+    params["faces"] = f.tolist() if scalar else mi.UInt32(f)
+    params.update()
+    return mi.load_dict({"type": "scene", "m": m})
 
 
 def _mitsuba_trace(variant: str) -> Callable[[Shape, Array, Array], Traced]:
@@ -249,16 +285,64 @@ def _unsupported_occluded(shape: Shape, o: Array, d: Array, tmax: Array) -> np.n
     raise NotImplementedError("shadow rays are not measured for this method yet")
 
 
+# ----------------------------------------------------------------------------------- Embree
+
+
+@functools.lru_cache(maxsize=32)
+def _embree_scene(robust: bool, shape: Shape) -> object:
+    from embreex import rtcore_scene
+    from embreex.mesh_construction import TriangleMesh
+
+    mesh = as_mesh(shape)  # type: ignore[arg-type]
+    tris = np.asarray(mesh.vertices, dtype=np.float64)[np.asarray(mesh.faces)]
+    scene = rtcore_scene.EmbreeScene(robust=robust)  # robust: RTC_SCENE_FLAG_ROBUST
+    TriangleMesh(scene, np.ascontiguousarray(tris, dtype=np.float32))
+    return scene
+
+
+def _embree_trace(robust: bool) -> Callable[[Shape, Array, Array], Traced]:
+    def trace(shape: Shape, o: Array, d: Array) -> Traced:
+        scene = _embree_scene(robust, shape)
+        o32 = np.ascontiguousarray(o, dtype=np.float32)
+        d32 = np.ascontiguousarray(d, dtype=np.float32)
+        r = scene.run(o32, d32, query="INTERSECT", output=1)  # type: ignore[attr-defined]
+        hit = np.asarray(r["geomID"]) >= 0
+        t = np.where(hit, np.asarray(r["tfar"], dtype=np.float64), np.inf)
+        with np.errstate(invalid="ignore"):
+            p = o + t[:, None] * d
+        n = np.asarray(r["Ng"], dtype=np.float64)
+        return Traced(hit, t, p, None, n)
+
+    return trace
+
+
+def embree_version() -> str:
+    """embreex's version and the Embree library it bundles (the version string compiled in)."""
+    import importlib.metadata
+    import re
+    from pathlib import Path
+
+    import embreex
+
+    ours = importlib.metadata.version("embreex")
+    libs = Path(embreex.__file__).resolve().parent.parent / "embreex.libs"
+    found = ""
+    for lib in sorted(libs.glob("libembree*")):
+        m = re.search(rb"\x00(\d+\.\d+\.\d+)\x00", lib.read_bytes())
+        found = m.group(1).decode() if m else ""
+    return f"embreex {ours} / Embree {found or 'unknown'}"
+
+
 def mitsuba_version() -> str:
     import mitsuba as mi
 
     return str(mi.__version__)
 
 
-ALL = ("sphere", "plane", "triangle", "box")
+ALL = ("sphere", "plane", "triangle", "box", "mesh")
 
 
-def methods(include_mitsuba: bool = True) -> list[Method]:
+def methods(include_mitsuba: bool = True, include_embree: bool = True) -> list[Method]:
     """Every method, in the order the report lists them."""
     out = [
         Method("rtlab", "1", frozenset(ALL), _rtlab_trace, _rtlab_spawn, _rtlab_occluded,
@@ -275,13 +359,21 @@ def methods(include_mitsuba: bool = True) -> list[Method]:
                 Method(
                     f"mitsuba-{variant}",
                     version,
-                    frozenset({"sphere"}),
+                    frozenset({"sphere", "triangle", "mesh", "box"}),
                     _mitsuba_trace(variant),
                     _unsupported_spawn,
                     _unsupported_occluded,
                     "float",
+                    frozenset({"decision"}),
                 )
             )
+    if include_embree:
+        version = embree_version()
+        for robust in (False, True):
+            out.append(Method("embree-robust" if robust else "embree", version,
+                              frozenset({"triangle", "mesh", "box"}), _embree_trace(robust),
+                              _unsupported_spawn, _unsupported_occluded, "float",
+                              frozenset({"decision"})))  # fmt: skip
     return out
 
 

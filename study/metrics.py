@@ -14,6 +14,9 @@ rays the method traced:
 - ``false_occlusions``: share of shadow rays blocked where nothing lies between;
 - ``scale_mismatches``: share of rays whose t does not scale by exactly 2^k;
 - ``nan_inf``: share of reported hits with a NaN or infinite t or point;
+- ``undecidable_differs``: share of the undecidable rays decided otherwise than the exact truth
+  (not an error: it shows the method's convention on edges, faces and planes);
+- ``leaks``: for closed meshes, share of the decidable true hits reported as misses;
 - ``time_per_ray_s``: wall time of the method's batch over its rays (the same rays for all).
 
 Every function returns (metrics, undecidable count, the indices of the failing rays per
@@ -74,8 +77,16 @@ def decision(case: Case, method: Method, tru: oracle.Truth) -> Result:
         else 0.0,
         "nan_inf": _nan_inf(tr),
         "time_per_ray_s": seconds / len(case.origins),
+        # Inside the band no method is wrong, but which way it goes says which convention it
+        # follows (rtlab: edges and faces belong to the shape, like the truth).
+        "undecidable_differs": _share(tr.hit != tru.hit, tru.undecidable),
     }
     fails = {"wrong_decisions": np.flatnonzero(wrong)}
+    if case.shape.kind == "mesh":
+        # A closed mesh: a decidable true hit reported as a miss went through a crack.
+        leak = tru.hit & ~tr.hit & decidable
+        m["leaks"] = _share(leak, tru.hit & decidable)
+        fails["leaks"] = np.flatnonzero(leak)
     if tr.p_error is not None:
         outside = np.array([bool(h) and not oracle.within_bound(case.shape, p, e)
                             for h, p, e in zip(tr.hit, tr.p, tr.p_error, strict=True)])  # fmt: skip

@@ -84,8 +84,8 @@ def _evaluate(case: Case, method: Method, tru: truth.Truth | None) -> metrics.Re
 def _applies(method: Method, case: Case) -> bool:
     if case.shape.kind not in method.kinds:
         return False
-    # Mitsuba is measured on first hits only this far (its spawn_ray and ray_test: to come).
-    return case.protocol == "decision" or not method.name.startswith("mitsuba")
+    # Mitsuba and Embree are measured on first hits only this far (spawn and shadow: to come).
+    return case.protocol in method.protocols
 
 
 def run_family(

@@ -66,4 +66,38 @@ class Box:
         return Box(_scale(self.lo, s), _scale(self.hi, s))
 
 
-Shape = Sphere | Plane | Triangle | Box
+@dataclass(frozen=True)
+class Mesh:
+    """Triangles sharing vertices (a closed mesh: every edge in two faces, opposite ways)."""
+
+    vertices: tuple[Vec, ...]
+    faces: tuple[tuple[int, int, int], ...]
+    kind = "mesh"
+
+    def scene_object(self) -> dict[str, Any]:
+        return {"type": "mesh", "vertices": [list(v) for v in self.vertices],
+                "faces": [list(f) for f in self.faces]}  # fmt: skip
+
+    def scaled(self, s: float) -> Mesh:
+        return Mesh(tuple(_scale(v, s) for v in self.vertices), self.faces)
+
+    def triangles(self) -> list[Triangle]:
+        v = self.vertices
+        return [Triangle(v[i], v[j], v[k]) for i, j, k in self.faces]
+
+
+def as_mesh(shape: Triangle | Box | Mesh) -> Mesh:
+    """The shape as triangles: a triangle as a one-triangle mesh, a box as its 12 triangles
+    (each face two, counter-clockwise seen from outside), for renderers that only have meshes."""
+    if isinstance(shape, Mesh):
+        return shape
+    if isinstance(shape, Triangle):
+        return Mesh((shape.a, shape.b, shape.c), ((0, 1, 2),))
+    lo, hi = shape.lo, shape.hi
+    corners = tuple(tuple(hi[k] if i >> k & 1 else lo[k] for k in range(3)) for i in range(8))
+    quads = ((0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5))
+    faces = tuple(f for a, b, c, d in quads for f in ((a, b, c), (a, c, d)))
+    return Mesh(corners, faces)
+
+
+Shape = Sphere | Plane | Triangle | Box | Mesh

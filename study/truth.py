@@ -21,7 +21,7 @@ import mpmath
 import numpy as np
 import numpy.typing as npt
 
-from study.shapes import Box, Plane, Shape, Sphere, Triangle
+from study.shapes import Box, Mesh, Plane, Shape, Sphere, Triangle
 
 #: Significant digits of the square roots and of route 2; far beyond the 17 of a double, so
 #: rounding the truth's t to the nearest double is exact whenever route 1 and 2 agree.
@@ -133,7 +133,23 @@ def _box1(bx: Box, o: Vec, d: Vec, tmax: float) -> tuple[bool, object]:
     return False, None
 
 
-_ROUTE1 = {"sphere": _sphere1, "plane": _plane1, "triangle": _triangle1, "box": _box1}
+def _mesh1(me: Mesh, o: Vec, d: Vec, tmax: float) -> tuple[bool, object]:
+    # The nearest of the triangles' exact hits: a ray through a shared edge or vertex meets
+    # every triangle around it there (edges count as each triangle's), at the same t.
+    best: Fraction | None = None
+    od = np.array([float(x) for x in o]), np.array([float(x) for x in d])
+    for tr in me.triangles():
+        # Integer arithmetic first (the same decision, exact), Fractions for the hits' t.
+        if tmax == math.inf and not _triangle_hits([tr.a, tr.b, tr.c], *od):
+            continue
+        h, t = _triangle1(tr, o, d, tmax)
+        if h and (best is None or t < best):
+            best = t
+    return (True, best) if best is not None else (False, None)
+
+
+_ROUTE1 = {"sphere": _sphere1, "plane": _plane1, "triangle": _triangle1, "box": _box1,
+           "mesh": _mesh1}  # fmt: skip
 
 
 # ------------------------------------------------------------------------------------ route 2
@@ -181,7 +197,9 @@ def _plane2(pl: Plane, o: list, d: list, tmax: float) -> tuple[bool, object, mpm
 
 
 def _vol(a: list, b: list, c: list) -> mpmath.mpf:
-    return mpmath.det(mpmath.matrix([a, b, c]))
+    # a . (b x c) expanded (no pivoting, no division): exact at DIGITS digits for coordinates
+    # of a double's range here, so an exact zero (a ray through an edge) stays zero.
+    return _mdot(a, _cross_m(b, c))
 
 
 def _triangle2(tr: Triangle, o: list, d: list, tmax: float) -> tuple[bool, object, mpmath.mpf]:
@@ -222,7 +240,13 @@ def _box2(bx: Box, o: list, d: list, tmax: float) -> tuple[bool, object, mpmath.
     return (True, ts[0], mpmath.mpf(1)) if ts[0] < tmax else (False, None, mpmath.mpf(1))
 
 
-_ROUTE2 = {"sphere": _sphere2, "plane": _plane2, "triangle": _triangle2, "box": _box2}
+def _mesh2(me: Mesh, o: list, d: list, tmax: float) -> tuple[bool, object, mpmath.mpf]:
+    hits = [t for h, t, _ in (_triangle2(tr, o, d, tmax) for tr in me.triangles()) if h]
+    return (True, min(hits), mpmath.mpf(1)) if hits else (False, None, mpmath.mpf(1))
+
+
+_ROUTE2 = {"sphere": _sphere2, "plane": _plane2, "triangle": _triangle2, "box": _box2,
+           "mesh": _mesh2}  # fmt: skip
 
 
 # ------------------------------------------------------------------------------ the interface
@@ -290,6 +314,108 @@ def _worst(shape: Shape, o: np.ndarray, d: np.ndarray) -> list[tuple[int, ...]]:
     return [up, tuple(-x for x in up)]
 
 
+def _integers(values: list[float]) -> list[int]:
+    """Doubles as integers over one common power of two (exact; a positive scale changes no
+    sign below)."""
+    ratios = [float(v).as_integer_ratio() for v in values]
+    big = max(den for _, den in ratios)
+    return [num * (big // den) for num, den in ratios]
+
+
+def _triangle_hits(verts: list[tuple[float, ...]], o: np.ndarray, d: np.ndarray) -> bool:
+    """route 1's decision for tmax = inf in integer arithmetic (no gcd: many times faster
+    than Fraction, for the many moves of the conditioning). Positions share one scale, the
+    direction another; Cramer's u, v, t numerators and denominator then have fixed degrees in
+    each, so their signs are those of route 1's."""
+    pos = _integers([x for v in verts for x in v] + [float(x) for x in o])
+    a, b, c, oo = (pos[0:3], pos[3:6], pos[6:9], pos[9:12])
+    nd = [-x for x in _integers([float(x) for x in d])]
+    e1 = [b[k] - a[k] for k in range(3)]
+    e2 = [c[k] - a[k] for k in range(3)]
+    s = [oo[k] - a[k] for k in range(3)]
+    p = _cross(e2, nd)  # the same helpers as route 1's, on ints
+    den = _dot(e1, p)
+    if den == 0:
+        return False
+    u, v, t = _dot(s, p), _dot(e1, _cross(s, nd)), _dot(e1, _cross(e2, s))
+    if den < 0:
+        den, u, v, t = -den, -u, -v, -t
+    return u >= 0 and v >= 0 and u + v <= den and t > 0
+
+
+#: Every sign pattern of a one-ulp move of six (ray) or three (vertex) components.
+_RAY_MOVES = [tuple(1 if (m >> k) & 1 else -1 for k in range(6)) for m in range(64)]
+_VERTEX_MOVES = [tuple(1 if (m >> k) & 1 else -1 for k in range(3)) for m in range(8)]
+
+
+def _ulp_norm(v: npt.ArrayLike) -> mpmath.mpf:
+    return mpmath.mpf(float(np.linalg.norm(np.spacing(np.abs(np.asarray(v, dtype=np.float64))))))
+
+
+def _near_boundary(tr: Triangle, o: np.ndarray, d: np.ndarray) -> bool:
+    """Whether the ray's line passes within one ulp move of the triangle's boundary: for some
+    edge, the distance between the line and the edge (a segment; for a zero-area triangle its
+    edges are all there is) is at most what moving each component of o, of d and of the
+    vertices by one ulp can shift them there (|ulp(o)| + |t| |ulp(d)| + max |ulp(vertex)|,
+    at the closest points; at DIGITS digits). The worst case of those moves, where the sign
+    patterns below only sample: a ray aimed at a sliver's sharp vertex slips into its wedge
+    only in a direction no pattern takes."""
+    om, dm = _m(o), _m(d)
+    verts = [_m(v) for v in (tr.a, tr.b, tr.c)]
+    du, ou = _ulp_norm(d), _ulp_norm(o)
+    vu = max(_ulp_norm(v) for v in (tr.a, tr.b, tr.c))
+    a = _mdot(dm, dm)
+    for j in range(3):
+        p, q = verts[j], verts[(j + 1) % 3]
+        e = [qi - pi for pi, qi in zip(p, q, strict=True)]
+        w0 = [oi - pi for oi, pi in zip(om, p, strict=True)]
+        b, c = _mdot(dm, e), _mdot(e, e)
+        dd, ee = _mdot(dm, w0), _mdot(e, w0)
+        den = a * c - b * b
+        candidates = [mpmath.mpf(0), mpmath.mpf(1)]
+        if den > 0:
+            candidates.append(min(max((a * ee - b * dd) / den, mpmath.mpf(0)), mpmath.mpf(1)))
+        for sv in candidates:
+            t = (b * sv - dd) / a  # the line's closest point to P + s e
+            gap = [w0[k] + t * dm[k] - sv * e[k] for k in range(3)]
+            if mpmath.sqrt(_mdot(gap, gap)) <= ou + abs(t) * du + vu:
+                return True
+    return False
+
+
+def _triangle_undecidable(tr: Triangle, o: np.ndarray, d: np.ndarray, hit: bool) -> bool:
+    """A triangle's conditioning. A ray near an edge or a vertex, or nearly in the plane, gets
+    every one-ulp move of its six components (64) and of each vertex alone (3 x 8): the
+    watertight test's and Moeller-Trumbore's rounding is a few ulps of the vertices (pbrt-v4
+    6.8.3 bounds it on the translated vertices), which for a ray nearly in the plane no move of
+    the ray alone can model (it moves the three edge functions together). Other rays get the
+    fixed PERTURBATIONS."""
+    verts = [tuple(float(x) for x in v) for v in (tr.a, tr.b, tr.c)]
+    rel = [np.array(v) - o for v in verts]
+    near = False
+    for j, k in ((1, 2), (2, 0), (0, 1)):
+        w = float(rel[j] @ np.cross(rel[k], d))
+        size = np.linalg.norm(rel[j]) * np.linalg.norm(rel[k]) * np.linalg.norm(d)
+        # "Near": within 1e-6 of its largest possible size (a margin: it only costs moves).
+        near = near or not abs(w) > 1e-6 * size
+    if near and _near_boundary(tr, o, d):
+        return True
+    moves = _RAY_MOVES if near else list(PERTURBATIONS)
+    for signs in moves:
+        po, pd = perturbed(o, d, signs)
+        if _triangle_hits(verts, po, pd) != hit:
+            return True
+    if near:
+        for i in range(3):
+            for signs in _VERTEX_MOVES:
+                moved = list(verts)
+                moved[i] = tuple(float(np.nextafter(x, math.copysign(math.inf, sg)))
+                                 for x, sg in zip(verts[i], signs, strict=True))  # fmt: skip
+                if _triangle_hits(moved, o, d) != hit:
+                    return True
+    return False
+
+
 def truth(
     shape: Shape,
     origins: npt.ArrayLike,
@@ -320,7 +446,9 @@ def truth(
                 far = last_exit(shape, o_all[i], d_all[i])
                 chord = (far - _as_mpf(te)) * mpmath.sqrt(_mpf(_dot(_v(d_all[i]), _v(d_all[i]))))
                 separation[i] = float(chord / 2 / shape.radius) if far is not None else 0.0
-        if conditioning:
+        if conditioning and isinstance(shape, Triangle) and tmax == math.inf:
+            undecidable[i] = _triangle_undecidable(shape, o_all[i], d_all[i], h)
+        elif conditioning:
             for signs in (*PERTURBATIONS, *_worst(shape, o_all[i], d_all[i])):
                 po, pd = perturbed(o_all[i], d_all[i], signs)
                 if first_hit(shape, po, pd, tmax)[0] != h:
@@ -375,6 +503,18 @@ def side(shape: Shape, p: npt.ArrayLike) -> int:
 def within_bound(shape: Shape, p: npt.ArrayLike, err: npt.ArrayLike) -> bool:
     """Whether the box p +- err (a hit point and its error bound) holds a point of the true
     surface, exactly: the promise offset_ray_origin() relies on."""
+    if isinstance(shape, Mesh):
+        # Some triangle's plane passes through the box (a plane, not the triangle itself: a
+        # weaker check, enough to catch a point refined off its surface).
+        q, e = np.asarray(p, dtype=np.float64), np.asarray(err, dtype=np.float64)
+        for tr in shape.triangles():
+            v = np.array([tr.a, tr.b, tr.c])
+            # Only triangles whose bounds (widened by the box and a relative 1e-12) reach it.
+            pad = e + 1e-12 * (np.abs(q) + np.abs(v).max(axis=0))
+            reach = np.all(v.min(axis=0) - pad <= q) and np.all(q <= v.max(axis=0) + pad)
+            if reach and within_bound(tr, p, err):
+                return True
+        return False
     q, e = _v(p), _v(err)
     lo = (q[0] - e[0], q[1] - e[1], q[2] - e[2])
     hi = (q[0] + e[0], q[1] + e[1], q[2] + e[2])
