@@ -79,11 +79,6 @@ def _png(fig: Any) -> bytes:
     return buffer.getvalue()
 
 
-def _rmse(image: np.ndarray, reference: np.ndarray) -> float:
-    diff = np.asarray(image, np.float64)[..., :3] - reference
-    return float(np.sqrt(np.mean(diff**2)))
-
-
 # The relative error's floor: a pixel's squared error over (reference^2 + 0.01), the relative
 # MSE of the denoising literature (Rousselle, Knaus and Zwicker 2011), so that a few pixels of
 # the light (radiance ~17, whose edge pixels have a per-sample spread ~8) do not outweigh the
@@ -267,6 +262,7 @@ def antialiasing(
     renderers trace the same ray). The reference: Mitsuba with stratified jittered samples,
     ``reference_chunks`` renders of 16 x 16 each (1024 per pixel at 4): stratified, each chunk's
     error is that of the best points plotted at four times their samples."""
+    from reference.metrics import rmse
     from reference.povray import run_povray
     from tracer.scene import load_scene
 
@@ -300,7 +296,7 @@ def antialiasing(
                     "n": n,
                     "spp": spp,
                     "seconds": seconds,
-                    "rmse": _rmse(image, ref.mean),
+                    "rmse": rmse(ref.mean, np.asarray(image)[..., :3]),
                 }
             )
     renderers = ["rtlab", "povray", "mitsuba"]
