@@ -121,9 +121,9 @@ class Assets:
     def _src(self, path: Path) -> str:
         if not self.inline:
             return path.relative_to(self.directory).as_posix()
-        data = base64.b64encode(path.read_bytes()).decode("ascii")
+        uri = data_uri(path)
         path.unlink()
-        return f"data:image/png;base64,{data}"
+        return uri
 
     def image(self, name: str, image: np.ndarray) -> str:
         from tracer.image import save_image
@@ -153,6 +153,12 @@ IMG_SRC = re.compile(r'(<img\b[^>]*?\bsrc=")([^"]+)(")')
 MIME = {".png": "image/png", ".jpg": "image/jpeg", ".jpeg": "image/jpeg", ".svg": "image/svg+xml"}
 
 
+def data_uri(path: Path) -> str:
+    """A file as a data: URI, its type from its suffix (a page's image inlined)."""
+    mime = MIME.get(path.suffix.lower(), "application/octet-stream")
+    return f"data:{mime};base64,{base64.b64encode(path.read_bytes()).decode('ascii')}"
+
+
 def inline_images(html: str, directory: Path) -> tuple[str, set[Path]]:
     """``--single-file``: every <img> whose source is a file under ``directory`` becomes a
     data: URI, so the page stands alone (to mail, to attach); returns the page and the files
@@ -171,9 +177,7 @@ def inline_images(html: str, directory: Path) -> tuple[str, set[Path]]:
         if not path.is_relative_to(directory):
             return match.group(0)
         used.add(path)
-        mime = MIME.get(path.suffix.lower(), "application/octet-stream")
-        data = base64.b64encode(path.read_bytes()).decode("ascii")
-        return f"{match.group(1)}data:{mime};base64,{data}{match.group(3)}"
+        return f"{match.group(1)}{data_uri(path)}{match.group(3)}"
 
     return IMG_SRC.sub(replace, html), used
 
