@@ -1,14 +1,17 @@
 """A lesson page's contents, every number of it computed here, by the run that makes the page.
 
 For each scene of the lesson (lessons/Lnn_name/scenes/): the solution rendered by rtlab (the
-one-ray tracer, ``packets=False``, as the grader renders a student's code), POV-Ray and Mitsuba
-rendered now and timed (reference/compare.py's runners), each reference against rtlab by
-reference/metrics.py (RMSE, max abs, PSNR, SSIM, FLIP, the share over tolerance) under the
-grader's rule (lessons/scene_checks.py: the tolerance per reference, the share scaled to the
-image's width). For the known-wrong versions (lessons/Lnn_name/mistakes/*.json): each built as
-an extension (lessons/sandbox.py, a child process; the build cached), the lesson's scenes
-rendered with it in a child process (lessons/scene_checks.render_student, as the grader does),
-and the scene it changes most shown beside the correct image.
+one-ray tracer, ``packets=False``, as the grader renders a student's code) and judged by the
+grader's own comparisons (lessons/scene_checks.py judge, judge_path) against the grader's
+cached references; each reference's metric row against rtlab by reference/metrics.py (RMSE,
+max abs, PSNR, SSIM, FLIP, the share over tolerance) under the grader's rule (the tolerance
+per reference, the share scaled to the image's width); POV-Ray and Mitsuba rendered again now
+to be timed (reference/compare.py's runners).
+
+For the known-wrong versions (lessons/Lnn_name/mistakes/*.json): each built as an extension
+(lessons/sandbox.py, a child process; the build cached), the lesson's scenes rendered with it
+in a child process (lessons/scene_checks.render_student, as the grader does), and the scene it
+changes most shown beside the correct image.
 """
 
 from __future__ import annotations
