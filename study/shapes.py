@@ -101,3 +101,45 @@ def as_mesh(shape: Triangle | Box | Mesh) -> Mesh:
 
 
 Shape = Sphere | Plane | Triangle | Box | Mesh
+
+
+# ------------------------------------------------- appended for issue 11's scene families
+# (study/families_scenes.py, study/truth_scenes.py: cylinders, nearly touching surfaces)
+
+
+@dataclass(frozen=True)
+class Cylinder:
+    """A capped cylinder from ``base`` to ``top`` (its axis the segment between them), as the
+    scene language describes it (tracer/scene/objects.py); the core places its own z axis on
+    the segment with a frame matrix (tracer/scene/placement.py frame()), exact for an axis
+    along a coordinate axis."""
+
+    base: Vec
+    top: Vec
+    radius: float
+    kind = "cylinder"
+
+    def scene_object(self) -> dict[str, Any]:
+        return {"type": "cylinder", "base": list(self.base), "top": list(self.top),
+                "radius": self.radius}  # fmt: skip
+
+    def scaled(self, s: float) -> Cylinder:
+        return Cylinder(_scale(self.base, s), _scale(self.top, s), self.radius * s)
+
+
+@dataclass(frozen=True)
+class Group:
+    """Several shapes in one scene (its scene objects are the members', in order): the first
+    surface a ray meets is one of them, named by its index."""
+
+    members: tuple[Sphere | Plane | Cylinder, ...]
+    kind = "group"
+
+    def scene_objects(self) -> list[dict[str, Any]]:
+        return [m.scene_object() for m in self.members]
+
+    def scene_object(self) -> dict[str, Any]:
+        return {"type": "group", "members": self.scene_objects()}
+
+    def scaled(self, s: float) -> Group:
+        return Group(tuple(m.scaled(s) for m in self.members))
