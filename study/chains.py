@@ -44,7 +44,7 @@ from study.methods_scenes import group_method, trace_group
 from study.shapes import Group, Plane, Sphere
 from study.truth_scenes import first_member, group_undecidable
 
-PROTOCOLS = ("touching", "chain")
+PROTOCOLS = ("touching", "chain", "camera")  # camera: study/cameras.py
 #: study/run.py's breakdown share for the chains (touching: its wrong_decisions, as decision's).
 HEADLINE = {"chain": "chain_errors"}
 BOUNCES = 8
@@ -74,13 +74,16 @@ def _cached(case: Case, make: object) -> object:
 
 def applies(method: Method, case: Case) -> bool:
     group = case.shape
-    assert isinstance(group, Group)
-    kinds = {m.kind for m in group.members}
-    need = "decision" if case.protocol == "touching" else "spawn"
+    kinds = {m.kind for m in group.members} if isinstance(group, Group) else {group.kind}
+    need = "spawn" if case.protocol == "chain" else "decision"
     return kinds <= method.kinds and need in method.protocols
 
 
 def evaluate(case: Case, method: Method) -> metrics.Result:
+    if case.protocol == "camera":
+        from study.cameras import camera
+
+        return camera(case, method)
     return touching(case, method) if case.protocol == "touching" else chain(case, method)
 
 

@@ -7,7 +7,9 @@
 - ``mirror-chains``: the same pairs, rays reflected at every hit for up to BOUNCES bounces
   (protocol "chain", study/chains.py);
 - ``grazing-cylinder``: issue 11's grazing rays on cylinders, a sibling of ``grazing`` (the
-  spheres' family) so that the spheres' figures and frozen rays stay as they are.
+  spheres' family) so that the spheres' figures and frozen rays stay as they are;
+- ``far-camera``: cameras 1 .. 1e8 away from a unit-size scene with fields of view down to
+  1e-7 degrees (protocol "camera", study/cameras.py).
 
 Every scene lies along the x axis (or, for cylinders, a coordinate axis), so that what the
 scene language describes is what the core builds, exactly (an oblique cylinder axis goes
@@ -127,6 +129,36 @@ def grazing_cylinder(knob: float, n: int, rng: np.random.Generator) -> list[Case
     return cases
 
 
+def far_camera(knob: float, n: int, rng: np.random.Generator) -> list[Case]:
+    """A unit-size sphere, box and triangle seen from ``knob`` away: rtlab's own pixel rays
+    (study/cameras.py) of a camera whose field of view fits the shape in the frame
+    (2 atan(0.6 / distance): 6.9e-7 degrees at 1e8), and of one zoomed 8 times further in
+    (8.6e-8 degrees at 1e8)."""
+    from study.cameras import CameraCase, pixel_rays
+    from study.shapes import Box, Triangle
+
+    side = max(int(math.sqrt(n // 40)), 2)  # 5 x 5 pixels quick, 10 x 10 full
+    centre = np.array([_f32(x) for x in rng.uniform(-1, 1, 3)])
+    shapes = [
+        Sphere(tuple(centre), 0.5),
+        Box(tuple(centre - 0.5), tuple(centre + 0.5)),
+        Triangle(*(tuple(float(x) for x in centre + 0.5 * u) for u in _units(rng, 3))),
+    ]
+    cases = []
+    for shape in shapes:
+        for zoom in (1, 8):
+            u = _units(rng, 1)[0]
+            eye = centre + knob * u
+            up = _perp(u[None, :], rng)[0] + 0.3 * _units(rng, 1)[0]
+            fov = math.degrees(2 * math.atan(0.6 / knob)) / zoom
+            cam = {"eye": [float(x) for x in eye], "look_at": [float(x) for x in centre],
+                   "up": [float(x) for x in up], "fov_y": fov, "width": side,
+                   "height": side}  # fmt: skip
+            o, d = pixel_rays(shape, cam)
+            cases.append(CameraCase(shape, o, d, protocol="camera", camera=cam))  # type: ignore[arg-type]
+    return cases
+
+
 SCENE_FAMILIES = (
     Family("nearly-touching", "gap (relative to the radius)", GAPS, QUICK_GAPS,
            ("sphere", "plane"), nearly_touching, "wrong_object", stiffer="down"),
@@ -135,6 +167,8 @@ SCENE_FAMILIES = (
     Family("grazing-cylinder", "k (miss distance r(1 +- 2^-k))",
            tuple(float(k) for k in range(1, 53)), (4.0, 40.0, 52.0), ("cylinder",),
            grazing_cylinder),
+    Family("far-camera", "camera distance / scene size", tuple(10.0**e for e in range(0, 9)),
+           (1.0, 1e4, 1e8), ("sphere", "box", "triangle"), far_camera),
 )  # fmt: skip
 
 FAMILIES.update({f.name: f for f in SCENE_FAMILIES})

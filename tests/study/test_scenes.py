@@ -10,7 +10,7 @@ import mpmath
 import numpy as np
 import pytest
 
-from study import chains, run, truth
+from study import cameras, chains, run, truth
 from study.families import FAMILIES
 from study.methods import methods
 from study.methods_scenes import trace_group
@@ -106,7 +106,7 @@ def figures():
     """rtlab and the textbook on the three families' quick values (the study's own seeds)."""
     ms = methods(include_mitsuba=False, include_embree=False)
     rows = []
-    for name in ("nearly-touching", "mirror-chains", "grazing-cylinder"):
+    for name in ("nearly-touching", "mirror-chains", "grazing-cylinder", "far-camera"):
         rows += run.run_family(FAMILIES[name], True, ms)[0]
     return {(r["family"], r["knob_value"], r["method"], r["metric"]): r for r in rows}
 
@@ -191,3 +191,39 @@ def test_rtlab_chains_break_where_its_own_offset_exceeds_the_gap():
             assert over, (case.shape, o, d)
     assert failing > 0  # the breakdown exists at one ulp (else this test should say so)
     assert math.isfinite(failing)
+
+
+def test_exact_pixel_rays_by_hand_and_the_cores():
+    # Looking down -z with a 90 degree field of view on a 2 x 2 image: the plane at distance 1
+    # is 2 high and 2 wide, right = forward x up = +x; pixel (0, 0)'s centre is at
+    # (-0.5, 0.5, -1), normalised.
+    cam = {"eye": [0.0, 0.0, 0.0], "look_at": [0.0, 0.0, -1.0], "up": [0.0, 1.0, 0.0],
+           "fov_y": 90.0, "width": 2, "height": 2}  # fmt: skip
+    exact = cameras.exact_directions(cam)
+    want = [x / mpmath.sqrt(1.5) for x in (-0.5, 0.5, -1)]
+    assert all(abs(a - b) < mpmath.mpf(10) ** -110 for a, b in zip(exact[0], want, strict=True))
+    o, d = cameras.pixel_rays(Sphere((0.0, 0.0, -5.0), 1.0), cam)
+    assert o.tolist() == [[0.0, 0.0, 0.0]] * 4
+    # The core's rays within a few ulps of the exact ones (tan(pi/4) and the normalisations
+    # round: a unit vector's components within 4 ulps of 1).
+    for row, e in zip(d, exact, strict=True):
+        assert np.max(np.abs(row - np.array([float(x) for x in e]))) < 4 * ULP
+
+
+def test_rtlab_far_cameras_keep_the_image(figures):
+    for knob in FAMILIES["far-camera"].quick_values:
+        for metric in ("wrong_decisions", "bound_violations", "nan_inf", "camera_eye_moved"):
+            assert _v(figures, "far-camera", knob, "rtlab", metric) == 0, (knob, metric)
+        # The pixel ray is forward + x w right + y h up, normalised: a few roundings of a unit
+        # vector, a few 1e-16 radians whatever the distance; a pixel at 1e8 (zoomed 8 times in,
+        # 5 pixels high) still spans 3e-10 radians: the camera loses nothing.
+        assert _v(figures, "far-camera", knob, "rtlab", "camera_angle_max_rad") < 1e-15
+        assert _v(figures, "far-camera", knob, "rtlab", "camera_error_pixels_max") < 1e-5
+
+
+def test_the_textbook_quadratic_loses_far_spheres(figures):
+    # From 1e8 away, b^2 and 4ac are about 4e16 (one ulp: 8) while their difference, 4 (r^2 -
+    # h^2) for radius 0.5, is below 1: the naive discriminant is rounding noise, and decisions
+    # on the sphere's rays go wrong; from distance 1 it is exact enough.
+    assert _v(figures, "far-camera", 1e8, "textbook-double", "wrong_decisions") > 0.05
+    assert _v(figures, "far-camera", 1.0, "textbook-double", "wrong_decisions") == 0
