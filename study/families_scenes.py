@@ -9,7 +9,9 @@
 - ``grazing-cylinder``: issue 11's grazing rays on cylinders, a sibling of ``grazing`` (the
   spheres' family) so that the spheres' figures and frozen rays stay as they are;
 - ``far-camera``: cameras 1 .. 1e8 away from a unit-size scene with fields of view down to
-  1e-7 degrees (protocol "camera", study/cameras.py).
+  1e-7 degrees (protocol "camera", study/cameras.py);
+- ``rotated-boxes``: the self-intersection protocol on boxes under random rotations
+  (study/shapes.py RotatedBox: the truth takes the core's own double matrix as exact).
 
 Every scene lies along the x axis (or, for cylinders, a coordinate axis), so that what the
 scene language describes is what the core builds, exactly (an oblique cylinder axis goes
@@ -159,6 +161,41 @@ def far_camera(knob: float, n: int, rng: np.random.Generator) -> list[Case]:
     return cases
 
 
+def rotated_boxes(knob: float, n: int, rng: np.random.Generator) -> list[Case]:
+    """study/families.py self_intersection()'s protocol on boxes placed by a random rotation
+    (any axis, any angle) and a translation at coordinates about ``knob``: hit a face, spawn from
+    the hit a ray leaving outward or inward; it must not meet the face it leaves."""
+    from study.shapes import RotatedBox
+
+    cases = []
+    for _ in range(2):
+        size = knob * 10.0 ** rng.uniform(-2, 0)
+        half = size * rng.uniform(0.2, 1, 3)
+        axis = _units(rng, 1)[0]
+        shape = RotatedBox(tuple(-half), tuple(half), tuple(axis), float(rng.uniform(0, 360)),
+                           tuple(rng.uniform(-1, 1, 3) * knob))  # type: ignore[arg-type]  # fmt: skip
+        m = np.asarray(shape.matrix())
+        k = n // 16
+        ax = rng.integers(0, 3, k)
+        sign = rng.choice([-1.0, 1.0], k)
+        q = rng.uniform(-0.95, 0.95, (k, 3)) * half
+        q[np.arange(k), ax] = sign * half[ax]
+        nn = np.zeros((k, 3))
+        nn[np.arange(k), ax] = sign
+        q = q @ m[:, :3].T + m[:, 3]
+        nn = _normalize(nn @ np.linalg.inv(m[:, :3]))  # the inverse transpose, row by row
+        back = _units(rng, k)
+        back = np.where((np.sum(back * nn, axis=1) < 0)[:, None], -back, back)
+        o = q + back * (size * 10.0 ** rng.uniform(0, 2, k))[:, None]
+        leave = _units(rng, k)
+        outward = np.arange(k) % 2 == 0
+        facing = np.sum(leave * nn, axis=1) > 0
+        leave = np.where((facing != outward)[:, None], -leave, leave)
+        cases.append(Case(shape, o, _normalize(q - o), protocol="spawn", leave=leave,
+                          outward=outward))  # fmt: skip
+    return cases
+
+
 SCENE_FAMILIES = (
     Family("nearly-touching", "gap (relative to the radius)", GAPS, QUICK_GAPS,
            ("sphere", "plane"), nearly_touching, "wrong_object", stiffer="down"),
@@ -169,6 +206,8 @@ SCENE_FAMILIES = (
            grazing_cylinder),
     Family("far-camera", "camera distance / scene size", tuple(10.0**e for e in range(0, 9)),
            (1.0, 1e4, 1e8), ("sphere", "box", "triangle"), far_camera),
+    Family("rotated-boxes", "coordinate scale", tuple(10.0**e for e in range(-8, 9)),
+           (1e-8, 1.0, 1e8), ("box",), rotated_boxes, "self_hits", stiffer="both"),
 )  # fmt: skip
 
 FAMILIES.update({f.name: f for f in SCENE_FAMILIES})

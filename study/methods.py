@@ -128,10 +128,10 @@ def _textbook(dtype: type) -> Callable[[Shape, Array, Array], Traced]:
     def trace(shape: Shape, o_in: Array, d_in: Array) -> Traced:
         if isinstance(shape, Mesh):
             return _nearest([trace(tr, o_in, d_in) for tr in shape.triangles()])
-        if shape.kind == "cylinder":  # issue 11's scene families: study/methods_scenes.py
-            from study.methods_scenes import textbook_cylinder
+        if shape.kind in ("cylinder", "rbox"):  # issue 11's scenes: study/methods_scenes.py
+            from study.methods_scenes import TEXTBOOK
 
-            return textbook_cylinder(shape, o_in, d_in, dtype)  # type: ignore[arg-type]
+            return TEXTBOOK[shape.kind](shape, o_in, d_in, dtype)
         o, d = o_in.astype(dtype), d_in.astype(dtype)
         with np.errstate(all="ignore"):
             if isinstance(shape, Sphere):
@@ -344,7 +344,7 @@ def mitsuba_version() -> str:
 
 
 ALL = ("sphere", "plane", "triangle", "box", "mesh")
-ALL = (*ALL, "cylinder")  # study/methods_scenes.py
+ALL = (*ALL, "cylinder", "rbox")  # study/methods_scenes.py
 
 
 def methods(include_mitsuba: bool = True, include_embree: bool = True) -> list[Method]:

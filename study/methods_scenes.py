@@ -4,6 +4,7 @@ every method on a group of shapes (nearly touching surfaces).
 - rtlab traces a group through one core scene of several objects (tracer/rays.intersect names
   the object met, tracer/cpp/09_scene.h closest_hit); a cylinder through its own
   tracer/cpp/17_cylinder.h (methods.py's _core_scene takes its scene object as it is).
+- The textbook's rotated box: the ray into the box's coordinates, the slab test there.
 - The textbook's cylinder: the naive quadratic b^2 - 4ac across the axis (w and d less their
   parts along the unit axis), (-b -+ sqrt) / 2a, the height checked, the caps as planes; a
   group: the nearest of its members' hits, each by the method's own formulas."""
@@ -16,7 +17,7 @@ import numpy as np
 import numpy.typing as npt
 
 from study.methods import Array, Method, Traced, _dot
-from study.shapes import Cylinder, Group
+from study.shapes import Box, Cylinder, Group, RotatedBox
 
 
 def textbook_cylinder(shape: Cylinder, o_in: Array, d_in: Array, dtype: type) -> Traced:
@@ -55,8 +56,28 @@ def textbook_cylinder(shape: Cylinder, o_in: Array, d_in: Array, dtype: type) ->
     return Traced(hit, best.astype(np.float64), p.astype(np.float64), None, n.astype(np.float64))
 
 
+def textbook_rotated_box(shape: RotatedBox, o_in: Array, d_in: Array, dtype: type) -> Traced:
+    """The ray taken into the box's coordinates by the inverse matrix (numpy's, in the
+    precision), the slab test there (the textbook's own), the normal back by the inverse
+    transpose."""
+    from study.methods import _textbook
+
+    m = np.asarray(shape.matrix(), dtype=dtype)
+    inv = np.linalg.inv(m[:, :3])
+    with np.errstate(all="ignore"):
+        qo = (o_in.astype(dtype) - m[:, 3]) @ inv.T
+        qd = d_in.astype(dtype) @ inv.T
+    local = _textbook(dtype)(Box(shape.lo, shape.hi), qo.astype(np.float64),
+                             qd.astype(np.float64))  # fmt: skip
+    with np.errstate(all="ignore"):
+        p = o_in.astype(dtype) + local.t.astype(dtype)[:, None] * d_in.astype(dtype)
+        n = local.n.astype(dtype) @ inv
+        n = n / np.sqrt(_dot(n, n))[:, None]
+    return Traced(local.hit, local.t, p.astype(np.float64), None, n.astype(np.float64))
+
+
 #: Per shape kind, the textbook's trace in a precision (study/methods.py _textbook dispatches).
-TEXTBOOK = {"cylinder": textbook_cylinder}
+TEXTBOOK = {"cylinder": textbook_cylinder, "rbox": textbook_rotated_box}
 
 
 @functools.lru_cache(maxsize=64)

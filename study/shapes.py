@@ -143,3 +143,33 @@ class Group:
 
     def scaled(self, s: float) -> Group:
         return Group(tuple(m.scaled(s) for m in self.members))
+
+
+@dataclass(frozen=True)
+class RotatedBox(Box):
+    """A box [lo, hi] in its own coordinates, placed by the scene language's transform (rotate
+    about ``axis`` by ``degrees``, then translate): the world box is A p + b for the 3x4 matrix
+    [A | b] that tracer/scene/model.py Transform.matrix computes in double, the very numbers the
+    core is given (tracer/render.py). The truth (study/truth_scenes.py) takes that matrix as
+    exact: the rounding of the rotation to doubles is the scene's, shared by every method."""
+
+    axis: Vec = (0.0, 0.0, 1.0)
+    degrees: float = 0.0
+    translate: Vec = (0.0, 0.0, 0.0)
+    kind = "rbox"
+
+    def scene_object(self) -> dict[str, Any]:
+        return super().scene_object() | {"transform": {
+            "rotate": {"axis": list(self.axis), "degrees": self.degrees},
+            "translate": list(self.translate)}}  # fmt: skip
+
+    def scaled(self, s: float) -> RotatedBox:
+        return RotatedBox(_scale(self.lo, s), _scale(self.hi, s), self.axis, self.degrees,
+                          _scale(self.translate, s))  # fmt: skip
+
+    def matrix(self) -> Any:
+        """The 3x4 object-to-world matrix, as the core gets it."""
+        from tracer.scene.model import Transform
+
+        return Transform(rotate_axis=self.axis, rotate_degrees=self.degrees,
+                         translate=self.translate).matrix[:3]  # fmt: skip

@@ -462,6 +462,8 @@ def truth(
 def last_exit(shape: Shape, o: npt.ArrayLike, d: npt.ArrayLike) -> mpmath.mpf | None:
     """The largest t > 0 where the ray's line meets a closed shape (sphere, box), else None: the
     far side an inward spawned ray must reach."""
+    if shape.kind == "rbox":  # study/truth_scenes.py
+        return truth_scenes.rbox_last_exit(shape, o, d)  # type: ignore[arg-type]
     if isinstance(shape, Sphere):
         ov, dv = _v(o), _v(d)
         f = _sub(ov, _v(shape.center))
@@ -487,6 +489,8 @@ def side(shape: Shape, p: npt.ArrayLike) -> int:
     triangle's plane, along its normal), -1 inside (below), 0 on it."""
     if shape.kind == "cylinder":  # study/truth_scenes.py
         return truth_scenes.cylinder_side(shape, p)  # type: ignore[arg-type]
+    if shape.kind == "rbox":
+        return truth_scenes.rbox_side(shape, p)  # type: ignore[arg-type]
     q = _v(p)
     if isinstance(shape, Sphere):
         f = _sub(q, _v(shape.center))

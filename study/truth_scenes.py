@@ -19,7 +19,7 @@ import numpy as np
 import numpy.typing as npt
 
 from study import truth as _t
-from study.shapes import Cylinder, Group, Plane, Sphere
+from study.shapes import Box, Cylinder, Group, Plane, RotatedBox, Sphere
 
 Vec = tuple[Fraction, Fraction, Fraction]
 
@@ -154,6 +154,13 @@ def first_member(group: Group, o: npt.ArrayLike, d: npt.ArrayLike,
     return (True, best[0], best[1]) if best is not None else (False, None, -1)
 
 
+def member_ts(group: Group, o: npt.ArrayLike, d: npt.ArrayLike) -> list[mpmath.mpf]:
+    """Every member's exact first t along the ray (those it meets), sorted."""
+    ov, dv = _t._v(o), _t._v(d)
+    hits = [_t._ROUTE1[m.kind](m, ov, dv, math.inf) for m in group.members]
+    return sorted(_t._as_mpf(t) for h, t in hits if h)
+
+
 def _group1(group: Group, o: Vec, d: Vec, tmax: float) -> tuple[bool, object]:
     h, t, _ = first_member(group, [float(x) for x in o], [float(x) for x in d], tmax)
     return h, t
@@ -272,6 +279,70 @@ def worst_cylinder(cy: Cylinder, o: np.ndarray, d: np.ndarray) -> list[tuple[int
     grad = np.concatenate([b * dd - a * f, b * f - c0 * dd])
     up = tuple(1 if g >= 0 else -1 for g in grad)
     return [up, tuple(-x for x in up)]
+
+
+# ---------------------------------------------------------------------------- rotated boxes
+# The matrix [A | b] the core is given, exact (its doubles as rationals): a ray in world space is
+# the ray A^-1 (o - b) + t A^-1 d in the box's own coordinates, with the same t.
+
+
+def _exact_inverse(rb: RotatedBox) -> tuple[list[list[Fraction]], Vec]:
+    m = [[Fraction(float(x)) for x in row] for row in rb.matrix()]
+    a = [row[:3] for row in m]
+    b = (m[0][3], m[1][3], m[2][3])
+    cof = [[a[(i + 1) % 3][(j + 1) % 3] * a[(i + 2) % 3][(j + 2) % 3]
+            - a[(i + 1) % 3][(j + 2) % 3] * a[(i + 2) % 3][(j + 1) % 3] for j in range(3)]
+           for i in range(3)]  # fmt: skip
+    det = sum(a[0][j] * cof[0][j] for j in range(3))
+    inv = [[cof[j][i] / det for j in range(3)] for i in range(3)]  # the adjugate over det
+    return inv, b
+
+
+def to_object(rb: RotatedBox, o: Vec, d: Vec) -> tuple[Vec, Vec]:
+    """The ray in the box's own coordinates, exactly."""
+    inv, b = _exact_inverse(rb)
+    w = _t._sub(o, b)
+    qo = tuple(sum(inv[i][k] * w[k] for k in range(3)) for i in range(3))
+    qd = tuple(sum(inv[i][k] * d[k] for k in range(3)) for i in range(3))
+    return qo, qd  # type: ignore[return-value]
+
+
+def _rbox1(rb: RotatedBox, o: Vec, d: Vec, tmax: float) -> tuple[bool, object]:
+    qo, qd = to_object(rb, o, d)
+    return _t._box1(Box(rb.lo, rb.hi), qo, qd, tmax)
+
+
+def _rbox2(rb: RotatedBox, o: list, d: list, tmax: float) -> tuple[bool, object, mpmath.mpf]:
+    # The inverse by mpmath's LU at DIGITS digits (not the adjugate), then face by face.
+    m = mpmath.matrix([[mpmath.mpf(float(x)) for x in row] for row in rb.matrix()])
+    inv = mpmath.inverse(m[:, :3])
+    w = mpmath.matrix([o[k] - m[k, 3] for k in range(3)])
+    qo, qd = inv * w, inv * mpmath.matrix(d)
+    return _t._box2(Box(rb.lo, rb.hi), [qo[k] for k in range(3)], [qd[k] for k in range(3)], tmax)
+
+
+def rbox_side(rb: RotatedBox, p: npt.ArrayLike) -> int:
+    q, _ = to_object(rb, _t._v(p), (Fraction(0), Fraction(0), Fraction(0)))
+    lo, hi = _t._v(rb.lo), _t._v(rb.hi)
+    if all(lo[k] < q[k] < hi[k] for k in range(3)):
+        return -1
+    return 0 if all(lo[k] <= q[k] <= hi[k] for k in range(3)) else 1
+
+
+def rbox_last_exit(rb: RotatedBox, o: npt.ArrayLike, d: npt.ArrayLike) -> mpmath.mpf | None:
+    """study/truth.py last_exit() for a rotated box: the far slab crossing, in its coordinates."""
+    qo, qd = to_object(rb, _t._v(o), _t._v(d))
+    lo, hi = _t._v(rb.lo), _t._v(rb.hi)
+    far: Fraction | None = None
+    for k in range(3):
+        if qd[k] != 0:
+            t2 = max((lo[k] - qo[k]) / qd[k], (hi[k] - qo[k]) / qd[k])
+            far = t2 if far is None else min(far, t2)
+    return _t._mpf(far) if far is not None and far > 0 else None
+
+
+ROUTE1["rbox"] = _rbox1
+ROUTE2["rbox"] = _rbox2
 
 
 _t._ROUTE1.update(ROUTE1)
