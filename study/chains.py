@@ -4,15 +4,16 @@ from study/run.py for the protocols in PROTOCOLS:
 - "touching": study/metrics.py decision() on the group (its first surface, whichever member),
   with the group's own conditioning (a one-ulp move of the ray or of one member changes the hit
   or the member met first: study/truth_scenes.py group_undecidable; or the two nearest members'
-  t lie within ORDER_ULPS ulps), and ``wrong_object``: the
-  share of decidable true hits where the method meets the other surface first.
+  t lie within ORDER_ULPS ulps), and ``wrong_object``: the share of decidable true hits where
+  the method meets the other surface first.
 - "chain": mirror chains. Each method reflects its ray at each hit (about its own normal) and
   spawns the next from the hit with its own spawn(), for up to BOUNCES bounces; the truth
   reflects exactly at its own hit points at DIGITS digits (route 2's hits in mpmath; a convex
   surface left from outside cannot be met again, so the next hit is looked for on the others).
   ``chain_errors``: the share of decidable chains whose sequence of members met differs from the
   truth's; ``chain_self_hits``: the share of decidable chains that meet the member they just
-left (the truth's never do: convex surfaces met from outside).
+  left (the truth's never do: convex surfaces met from outside).
+- "camera": far cameras, study/cameras.py.
 
 A chain is decidable when the truth's sequence is also what one gets (a) from the start ray
 moved by one ulp (study/truth.py's PERTURBATIONS) and (b) with the hit point and the reflected
@@ -51,8 +52,11 @@ HEADLINE = {"chain": "chain_errors"}
 BOUNCES = 8
 #: A start or hit point closer than this many ulps of its coordinates (their norm) to another
 #: surface makes the chain undecidable: a hit point's rounding is up to half an ulp in each
-#: coordinate, a robust method's error bound a few ulps (rtlab's and pbrt-v4's gamma(5) |p| is
+#: coordinate, a robust method's error bound a few ulps (pbrt-v4's sphere bound gamma(5) |p| is
 #: 2.5 ulps per component) and its offset one more; 8 leaves room for both sides of the gap.
+#: rtlab's own sphere bound is wider in world space (measured: 5e-14 at coordinates near 13,
+#: about 28 ulps, the centre's size counting too), so its chains break at gaps of 1e-15 and one
+#: ulp, where the clearance lies between the two (tests/study/test_scenes.py).
 CLEARANCE_ULPS = 8
 #: Two members met at exact t closer than this many ulps of t: which comes first is not
 #: decidable by a method whose t is within a few ulps (issue 11's promise for rtlab is "t within a
