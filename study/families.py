@@ -526,3 +526,8 @@ FAMILIES.update({
                (1e-8, 1.0, 1e8), ("box",), boxes, stiffer="both"),
     )
 })  # fmt: skip
+
+
+# Issue 11's scene families (nearly touching surfaces, mirror chains, grazing cylinders) add
+# themselves to FAMILIES: study/families_scenes.py.
+from study import families_scenes  # noqa: E402, F401

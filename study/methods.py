@@ -128,6 +128,10 @@ def _textbook(dtype: type) -> Callable[[Shape, Array, Array], Traced]:
     def trace(shape: Shape, o_in: Array, d_in: Array) -> Traced:
         if isinstance(shape, Mesh):
             return _nearest([trace(tr, o_in, d_in) for tr in shape.triangles()])
+        if shape.kind in ("cylinder", "rbox"):  # issue 11's scenes: study/methods_scenes.py
+            from study.methods_scenes import TEXTBOOK
+
+            return TEXTBOOK[shape.kind](shape, o_in, d_in, dtype)
         o, d = o_in.astype(dtype), d_in.astype(dtype)
         with np.errstate(all="ignore"):
             if isinstance(shape, Sphere):
@@ -235,6 +239,15 @@ def _mi_scene(variant: str, shape: Shape) -> object:
                 "s": {"type": "sphere", "center": list(shape.center), "radius": shape.radius},
             }
         )
+    if shape.kind == "cylinder":  # no caps: measured on rays that cannot meet one (grazing)
+        c = shape.scene_object()  # type: ignore[attr-defined]
+        cyl = {"type": "cylinder", "p0": c["base"], "p1": c["top"], "radius": c["radius"]}
+        level = mi.log_level()  # its float frame warns of a shear of an ulp: its own rounding
+        mi.set_log_level(mi.LogLevel.Error)
+        try:
+            return mi.load_dict({"type": "scene", "c": cyl})
+        finally:
+            mi.set_log_level(level)
     # Triangles: an mi.Mesh filled through traverse() (Mitsuba keeps vertices in float32).
     mesh = as_mesh(shape)  # type: ignore[arg-type]
     v = np.asarray(mesh.vertices, dtype=np.float32).ravel()
@@ -340,6 +353,7 @@ def mitsuba_version() -> str:
 
 
 ALL = ("sphere", "plane", "triangle", "box", "mesh")
+ALL = (*ALL, "cylinder", "rbox")  # study/methods_scenes.py
 
 
 def methods(include_mitsuba: bool = True, include_embree: bool = True) -> list[Method]:
@@ -359,7 +373,7 @@ def methods(include_mitsuba: bool = True, include_embree: bool = True) -> list[M
                 Method(
                     f"mitsuba-{variant}",
                     version,
-                    frozenset({"sphere", "triangle", "mesh", "box"}),
+                    frozenset({"sphere", "triangle", "mesh", "box", "cylinder"}),
                     _mitsuba_trace(variant),
                     _unsupported_spawn,
                     _unsupported_occluded,

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from study import metrics, truth
+from study import chains, metrics, truth
 from study.families import FAMILIES, Case, Family
 from study.methods import Method, methods
 
@@ -27,6 +27,7 @@ BREAKDOWN = 1e-3
 #: The share metrics a breakdown is judged by, per protocol.
 HEADLINE = {"decision": "wrong_decisions", "spawn": "self_hits", "shadow": "false_occlusions",
             "scale": "scale_mismatches"}  # fmt: skip
+HEADLINE.update(chains.HEADLINE)  # mirror chains: study/chains.py
 #: Failing rays kept per family, knob value, method and metric (as hex floats).
 KEEP = 10
 
@@ -71,6 +72,8 @@ def _hex(v: np.ndarray) -> list[str]:
 
 
 def _evaluate(case: Case, method: Method, tru: truth.Truth | None) -> metrics.Result:
+    if case.protocol in chains.PROTOCOLS:  # nearly touching surfaces: study/chains.py
+        return chains.evaluate(case, method)
     if case.protocol == "decision":
         assert tru is not None
         return metrics.decision(case, method, tru)
@@ -82,6 +85,8 @@ def _evaluate(case: Case, method: Method, tru: truth.Truth | None) -> metrics.Re
 
 
 def _applies(method: Method, case: Case) -> bool:
+    if case.protocol in chains.PROTOCOLS:
+        return chains.applies(method, case)
     if case.shape.kind not in method.kinds:
         return False
     # Mitsuba and Embree are measured on first hits only this far (spawn and shadow: to come).

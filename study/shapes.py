@@ -101,3 +101,75 @@ def as_mesh(shape: Triangle | Box | Mesh) -> Mesh:
 
 
 Shape = Sphere | Plane | Triangle | Box | Mesh
+
+
+# ------------------------------------------------- appended for issue 11's scene families
+# (study/families_scenes.py, study/truth_scenes.py: cylinders, nearly touching surfaces)
+
+
+@dataclass(frozen=True)
+class Cylinder:
+    """A capped cylinder from ``base`` to ``top`` (its axis the segment between them), as the
+    scene language describes it (tracer/scene/objects.py); the core places its own z axis on
+    the segment with a frame matrix (tracer/scene/placement.py frame()), exact for an axis
+    along a coordinate axis."""
+
+    base: Vec
+    top: Vec
+    radius: float
+    kind = "cylinder"
+
+    def scene_object(self) -> dict[str, Any]:
+        return {"type": "cylinder", "base": list(self.base), "top": list(self.top),
+                "radius": self.radius}  # fmt: skip
+
+    def scaled(self, s: float) -> Cylinder:
+        return Cylinder(_scale(self.base, s), _scale(self.top, s), self.radius * s)
+
+
+@dataclass(frozen=True)
+class Group:
+    """Several shapes in one scene (its scene objects are the members', in order): the first
+    surface a ray meets is one of them, named by its index."""
+
+    members: tuple[Sphere | Plane | Cylinder, ...]
+    kind = "group"
+
+    def scene_objects(self) -> list[dict[str, Any]]:
+        return [m.scene_object() for m in self.members]
+
+    def scene_object(self) -> dict[str, Any]:
+        return {"type": "group", "members": self.scene_objects()}
+
+    def scaled(self, s: float) -> Group:
+        return Group(tuple(m.scaled(s) for m in self.members))
+
+
+@dataclass(frozen=True)
+class RotatedBox(Box):
+    """A box [lo, hi] in its own coordinates, placed by the scene language's transform (rotate
+    about ``axis`` by ``degrees``, then translate): the world box is A p + b for the 3x4 matrix
+    [A | b] that tracer/scene/model.py Transform.matrix computes in double, the very numbers the
+    core is given (tracer/render.py). The truth (study/truth_scenes.py) takes that matrix as
+    exact: the rounding of the rotation to doubles is the scene's, shared by every method."""
+
+    axis: Vec = (0.0, 0.0, 1.0)
+    degrees: float = 0.0
+    translate: Vec = (0.0, 0.0, 0.0)
+    kind = "rbox"
+
+    def scene_object(self) -> dict[str, Any]:
+        return super().scene_object() | {"transform": {
+            "rotate": {"axis": list(self.axis), "degrees": self.degrees},
+            "translate": list(self.translate)}}  # fmt: skip
+
+    def scaled(self, s: float) -> RotatedBox:
+        return RotatedBox(_scale(self.lo, s), _scale(self.hi, s), self.axis, self.degrees,
+                          _scale(self.translate, s))  # fmt: skip
+
+    def matrix(self) -> Any:
+        """The 3x4 object-to-world matrix, as the core gets it."""
+        from tracer.scene.model import Transform
+
+        return Transform(rotate_axis=self.axis, rotate_degrees=self.degrees,
+                         translate=self.translate).matrix[:3]  # fmt: skip

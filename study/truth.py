@@ -304,6 +304,8 @@ def _worst(shape: Shape, o: np.ndarray, d: np.ndarray) -> list[tuple[int, ...]]:
     """For a sphere, the two one-ulp moves that change the discriminant most (each component
     moved by the sign of its derivative, and the opposite): to first order the worst of all 64.
     dD/do = 2 (b d - a f), dD/dd = 2 (b f - c0 d), evaluated in double (only signs matter)."""
+    if shape.kind == "cylinder":  # the same across its axis: study/truth_scenes.py
+        return truth_scenes.worst_cylinder(shape, o, d)  # type: ignore[arg-type]
     if not isinstance(shape, Sphere):
         return []
     f = o - np.array(shape.center)
@@ -460,6 +462,8 @@ def truth(
 def last_exit(shape: Shape, o: npt.ArrayLike, d: npt.ArrayLike) -> mpmath.mpf | None:
     """The largest t > 0 where the ray's line meets a closed shape (sphere, box), else None: the
     far side an inward spawned ray must reach."""
+    if shape.kind == "rbox":  # study/truth_scenes.py
+        return truth_scenes.rbox_last_exit(shape, o, d)  # type: ignore[arg-type]
     if isinstance(shape, Sphere):
         ov, dv = _v(o), _v(d)
         f = _sub(ov, _v(shape.center))
@@ -483,6 +487,10 @@ def last_exit(shape: Shape, o: npt.ArrayLike, d: npt.ArrayLike) -> mpmath.mpf | 
 def side(shape: Shape, p: npt.ArrayLike) -> int:
     """Which side of the surface the point lies on, exactly: +1 outside (or above a plane or a
     triangle's plane, along its normal), -1 inside (below), 0 on it."""
+    if shape.kind == "cylinder":  # study/truth_scenes.py
+        return truth_scenes.cylinder_side(shape, p)  # type: ignore[arg-type]
+    if shape.kind == "rbox":
+        return truth_scenes.rbox_side(shape, p)  # type: ignore[arg-type]
     q = _v(p)
     if isinstance(shape, Sphere):
         f = _sub(q, _v(shape.center))
@@ -503,6 +511,8 @@ def side(shape: Shape, p: npt.ArrayLike) -> int:
 def within_bound(shape: Shape, p: npt.ArrayLike, err: npt.ArrayLike) -> bool:
     """Whether the box p +- err (a hit point and its error bound) holds a point of the true
     surface, exactly: the promise offset_ray_origin() relies on."""
+    if shape.kind in truth_scenes.WITHIN:  # cylinders, groups: study/truth_scenes.py
+        return truth_scenes.WITHIN[shape.kind](shape, p, err)
     if isinstance(shape, Mesh):
         # Some triangle's plane passes through the box (a plane, not the triangle itself: a
         # weaker check, enough to catch a point refined off its surface).
@@ -526,3 +536,8 @@ def within_bound(shape: Shape, p: npt.ArrayLike, err: npt.ArrayLike) -> bool:
         return near <= r2 <= far
     sides = {side(shape, x) for x in corners}
     return len(sides) > 1 or 0 in sides
+
+
+# Issue 11's scene families (cylinders, groups of nearly touching shapes): study/truth_scenes.py.
+# Importing it adds their routes to _ROUTE1 and _ROUTE2 (it builds on the helpers above).
+from study import truth_scenes  # noqa: E402
