@@ -10,6 +10,10 @@ one, the normal), ``spawn`` (where a ray leaving a hit towards a direction start
   the slab test, t = (p0 - o).n / d.n, and a fixed offset of 1e-4 along the normal for spawned
   rays. The float one rounds the scene and the rays to float32 first, as a float renderer does:
   that rounding is part of its error (it is judged on the double rays, like every method).
+- ``rtlab-float``: rtlab's own robust algorithms (the same headers, ported to numpy in
+  study/rtlab_float.py) in float32, with gamma(n) of float's unit roundoff and its own spawn
+  (offset_ray_origin by its own error bound) and occluded: what robustness buys in float,
+  beside textbook-float.
 - ``mitsuba-scalar_rgb`` / ``mitsuba-llvm_ad_rgb``: mi.Scene.ray_intersect on the same rays
   (spheres; triangles, meshes and boxes as an mi.Mesh of their triangles), version
   mi.__version__.
@@ -28,6 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from study import rtlab_float
 from study.shapes import Mesh, Plane, Shape, Sphere, Triangle, as_mesh
 
 Array = npt.NDArray[np.float64]
@@ -351,6 +356,7 @@ def methods(include_mitsuba: bool = True, include_embree: bool = True) -> list[M
                _textbook_spawn(np.float64), _textbook_occluded(np.float64), "double"),
         Method("textbook-float", "1", frozenset(ALL), _textbook(np.float32),
                _textbook_spawn(np.float32), _textbook_occluded(np.float32), "float"),
+        Method("rtlab-float", "1", frozenset(ALL), *rtlab_float.port(np.float32), "float"),
     ]  # fmt: skip
     if include_mitsuba:
         version = mitsuba_version()
