@@ -115,7 +115,9 @@ def spawn(case: Case, method: Method) -> Result:
         self_hit = hit & tr2.hit
         missed = np.zeros(len(hit), dtype=bool)
     want = np.where(case.outward, 1, -1)
-    wrong_side = np.array([bool(h) and oracle.side(case.shape, p) != w
+    # A spawned origin that is not finite (a float method's offset overflowed) is on no side.
+    wrong_side = np.array([bool(h) and (not np.all(np.isfinite(p))
+                                        or oracle.side(case.shape, p) != w)
                            for h, p, w in zip(hit, o2, want, strict=True)])  # fmt: skip
     m = {
         "self_hits": _share(self_hit, hit),

@@ -84,7 +84,7 @@ def _evaluate(case: Case, method: Method, tru: truth.Truth | None) -> metrics.Re
 def _applies(method: Method, case: Case) -> bool:
     if case.shape.kind not in method.kinds:
         return False
-    # Mitsuba and Embree are measured on first hits only this far (spawn and shadow: to come).
+    # Every method has spawn and occluded now; a method may still name fewer protocols.
     return case.protocol in method.protocols
 
 

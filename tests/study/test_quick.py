@@ -277,3 +277,32 @@ def test_truth_on_degenerate_triangles_and_shared_edges():
         v = [tuple(x) for x in rng.normal(size=(3, 3))]
         oo, dd = rng.normal(size=3) * 3, rng.normal(size=3)
         assert truth._triangle_hits(v, oo, dd) == truth.first_hit(Triangle(*v), oo, dd)[0]
+
+
+def test_rtlab_float_robust_spawn_where_the_textbook_float_self_hits(quick):
+    """rtlab's own algorithms in float (study/rtlab_float.py): the spawn offset by the hit's
+    own error bound leaves the surface at every scale, where the fixed 1e-4 of the textbook
+    in float does not (at 1e8 float's ulp is 8)."""
+    _, rows = quick
+    for knob in (1e-8, 1.0, 1e8):
+        for metric in ("self_hits", "missed_far", "wrong_side"):
+            assert value(rows, "self-intersection", knob, "rtlab-float", metric) == 0
+    assert value(rows, "self-intersection", 1e8, "textbook-float", "self_hits") > 0.1
+    # Its bounds hold in float too (gamma(n) of float's unit roundoff).
+    assert all(r["value"] == 0 for r in rows
+               if r["method"] == "rtlab-float" and r["metric"] == "bound_violations")  # fmt: skip
+
+
+def test_mitsuba_and_embree_on_the_spawn_and_shadow_protocols(quick):
+    _, rows = quick
+    for m in ("mitsuba-scalar_rgb", "mitsuba-llvm_ad_rgb", "embree", "embree-robust"):
+        assert any(r["method"] == m and r["metric"] == "self_hits" for r in rows), m
+    for m in ("mitsuba-scalar_rgb", "mitsuba-llvm_ad_rgb"):
+        assert any(r["method"] == m and r["metric"] == "false_occlusions" for r in rows), m
+        # spawn_ray's offset scales with the point (1 + max |p|) RayEpsilon: no self-hit at 1e8
+        assert value(rows, "self-intersection", 1e8, m, "self_hits") == 0
+        # but its "1 +" is an absolute 9e-5 floor that jumps past a shape of size 1e-8.
+        assert value(rows, "self-intersection", 1e-8, m, "missed_far") > 0.1
+    # Embree's user's fixed tnear = 0.001f is below float's ulp at 1e8 (8): self-hits.
+    assert value(rows, "self-intersection", 1e8, "embree", "self_hits") > 0.1
+    assert value(rows, "self-intersection", 1.0, "embree", "self_hits") == 0
