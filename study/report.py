@@ -25,8 +25,17 @@ def _x(family: Family, values: list[float]) -> tuple[list[float], str]:
     return [v if v > 0 else zero for v in values], family.knob + note
 
 
+#: Where a t error of 0 ulps is drawn on the t panel's log axis.
+T_FLOOR = 0.1
+#: The t panel's metrics: (metric, line style).
+T_METRICS = (("t_error_ulps_median", "-"), ("t_error_ulps_max", ":"))
+
+
 def plot_family(family: Family, rows: list[dict[str, Any]], path: Path) -> str:
-    """Write the family's plot; returns its alt text."""
+    """Write the family's plot: the headline share against the knob (left) and t's error in
+    ulps, median and max over the rays both the method and the truth hit (right), "no data"
+    marked where no ray is a hit for both (a method that misses everything has no t error,
+    which a 0 would draw as perfect). Returns its alt text."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -35,7 +44,7 @@ def plot_family(family: Family, rows: list[dict[str, Any]], path: Path) -> str:
     from tracer.image import atomic_path
 
     mine = [r for r in rows if r["family"] == family.name and r["metric"] == family.metric]
-    fig, ax = plt.subplots(figsize=(6.4, 4.0), dpi=100)
+    fig, (ax, tax) = plt.subplots(1, 2, figsize=(11.0, 4.0), dpi=100)
     knobs = sorted({r["knob_value"] for r in mine})
     xs, label = _x(family, knobs)
     where = dict(zip(knobs, xs, strict=True))
@@ -43,27 +52,70 @@ def plot_family(family: Family, rows: list[dict[str, Any]], path: Path) -> str:
     for v in sorted(set(shaded)):
         x = where[v]
         lo, hi = (x / 1.5, x * 1.5) if family.log_knob else (x - 0.5, x + 0.5)
-        ax.axvspan(lo, hi, color="0.85", zorder=0)
+        for a in (ax, tax):
+            a.axvspan(lo, hi, color="0.85", zorder=0)
     described = []
-    for method in dict.fromkeys(r["method"] for r in mine):
+    t_said = []
+    methods = list(dict.fromkeys(r["method"] for r in mine))
+    t_rows = {(r["knob_value"], r["method"], r["metric"]): r["value"] for r in rows
+              if r["family"] == family.name and r["metric"] in dict(T_METRICS)}  # fmt: skip
+    no_data_drawn = False
+    for i, method in enumerate(methods):
+        color = f"C{i % 10}"
         pts = sorted((where[r["knob_value"]], max(r["value"], FLOOR)) for r in mine
                      if r["method"] == method)  # fmt: skip
-        ax.plot([p[0] for p in pts], [p[1] for p in pts], marker="o", label=method)
+        ax.plot([p[0] for p in pts], [p[1] for p in pts], marker="o", label=method, color=color)
         worst = max(r["value"] for r in mine if r["method"] == method)
         described.append(f"{method} at most {worst:.3g}")
-    if family.log_knob:
-        ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel(label)
+        if not t_rows:
+            continue
+        for metric, style in T_METRICS:
+            tp = [(where[k], max(t_rows[(k, method, metric)], T_FLOOR)) for k in knobs
+                  if t_rows.get((k, method, metric)) is not None]  # fmt: skip
+            if tp:
+                tax.plot([p[0] for p in tp], [p[1] for p in tp], style, marker=".", color=color)
+        missing = [k for k in knobs if (k, method, "t_error_ulps_median") not in t_rows]
+        if missing:
+            # No ray is a hit for both: no data (drawn below the axis' floor, never as 0).
+            tax.plot([where[k] for k in missing], [T_FLOOR / 3] * len(missing), "x",
+                     color=color, markersize=8)  # fmt: skip
+            no_data_drawn = True
+        worst_t = max((t_rows[(k, method, "t_error_ulps_max")] or 0.0 for k in knobs
+                       if (k, method, "t_error_ulps_max") in t_rows), default=None)  # fmt: skip
+        t_said.append(f"{method} " + (f"at most {worst_t:.3g} ulps" if worst_t is not None
+                                      else "no data") +
+                      (f" (no data at {', '.join(f'{k:g}' for k in missing)})"
+                       if missing and worst_t is not None else ""))  # fmt: skip
+    for a in (ax, tax) if t_rows else (ax,):
+        if family.log_knob:
+            a.set_xscale("log")
+        a.set_yscale("log")
+        a.set_xlabel(label)
     ax.set_ylabel(family.metric.replace("_", " ") + f" (0 drawn at {FLOOR:g})")
-    ax.set_title(family.name + (" (grey: knob values with undecidable rays)" if shaded else ""))
+    ax.set_title(family.name + (" (grey: knob values with undecidable rays)" if shaded else ""),
+                 fontsize=10)  # fmt: skip
     ax.legend(fontsize=8)
+    if t_rows:
+        tax.set_ylabel(f"t error, ulps (0 drawn at {T_FLOOR:g})")
+        tax.set_title("t error: median (solid), max (dotted); x: no data", fontsize=10)
+        if no_data_drawn:
+            tax.axhline(T_FLOOR / 2, color="0.5", linewidth=0.5)
+            tax.text(0.01, 0.02, "x below the line: no ray a hit for both (no data)",
+                     transform=tax.transAxes, fontsize=7)  # fmt: skip
+    else:
+        tax.set_xticks([])
+        tax.set_yticks([])
+        tax.set_title("t error", fontsize=10)
+        tax.text(0.5, 0.5, "no data: this protocol judges no t", ha="center", va="center",
+                 transform=tax.transAxes)  # fmt: skip
     fig.tight_layout()
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png")
     plt.close(fig)
+    t_alt = ("; t error in ulps over the rays both hit: " + "; ".join(t_said) if t_rows
+             else "; no t error: this protocol judges no t")  # fmt: skip
     return (f"{family.name}: {family.metric.replace('_', ' ')} against {family.knob}, one line "
-            f"per method; " + "; ".join(described))  # fmt: skip
+            f"per method; " + "; ".join(described) + t_alt)  # fmt: skip
 
 
 #: Method names that say how they are built, for the Pareto plot's labels (robust or naive,

@@ -48,22 +48,33 @@ class _Acc:
     rays: int = 0
     undecidable: int = 0
     sums: dict[str, float] | None = None
+    weights: dict[str, int] | None = None  # the rays of the cases that report each metric
     maxima: dict[str, float] | None = None
 
     def add(self, m: dict[str, float], rays: int, undecidable: int) -> None:
         self.sums = self.sums or {}
+        self.weights = self.weights or {}
         self.maxima = self.maxima or {}
         for k, v in m.items():
-            if k.endswith("_max"):
+            if k.endswith("_max") or k.endswith("_max_separated"):
                 self.maxima[k] = max(self.maxima.get(k, 0.0), v)
             else:
                 self.sums[k] = self.sums.get(k, 0.0) + v * rays
+                self.weights[k] = self.weights.get(k, 0) + rays
         self.rays += rays
         self.undecidable += undecidable
 
     def values(self) -> dict[str, float]:
-        out = {k: v / self.rays for k, v in (self.sums or {}).items()}
+        """Each metric over the cases that report it (a case with no ray that both the method
+        and the truth hit reports no t error: it is left out, not counted as 0)."""
+        weights = self.weights or {}
+        out = {k: v / weights[k] for k, v in (self.sums or {}).items()}
         return out | dict(self.maxima or {})
+
+
+def _json_value(v: float) -> float | None:
+    """A row's value as JSON has it: NaN and infinities (an overflowed t error) are null."""
+    return v if np.isfinite(v) else None
 
 
 def _hex(v: np.ndarray) -> list[str]:
@@ -128,7 +139,7 @@ def run_family(
                 rows.append({
                     "family": family.name, "knob": family.knob, "knob_value": value,
                     "method": method.name, "version": method.version, "metric": metric,
-                    "value": v, "rays": a.rays, "undecidable": a.undecidable,
+                    "value": _json_value(v), "rays": a.rays, "undecidable": a.undecidable,
                 })  # fmt: skip
     return rows, failures
 
@@ -191,7 +202,7 @@ def run(out: Path, quick: bool = False, family: str | None = None,
     for name, data in (("rows.json", rows), ("breakdown.json", brk),
                        ("failures.json", failures)):  # fmt: skip
         with atomic_path(out / name) as tmp:
-            tmp.write_text(json.dumps(data, indent=1) + "\n")
+            tmp.write_text(json.dumps(data, indent=1, allow_nan=False) + "\n")
     from study.report import write_report
 
     write_report(out, families, rows, brk, failures, quick=quick, seconds=seconds)

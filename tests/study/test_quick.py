@@ -325,3 +325,19 @@ def test_error_against_run_time_as_a_pareto_plot(quick):
     assert re.search(r'alt="Share of wrong answers against time per ray[^"]*Pareto front', img)
     assert (out / "pareto.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "call overhead" in html  # the timing caveat is stated
+
+
+def test_t_error_is_left_out_where_no_ray_is_a_hit_for_both(quick):
+    """Mitsuba misses every ray of a sphere 1e10 radii away (its float rays): no t error row
+    there, both_hits 0, and the plot's alt text says "no data"; rows.json is valid JSON."""
+    out, rows = quick
+    json.loads((out / "rows.json").read_text(), parse_constant=lambda c: pytest.fail(c))
+    assert value(rows, "sphere-distance", 1e10, "mitsuba-scalar_rgb", "both_hits") == 0
+    assert not [r for r in rows if (r["family"], r["knob_value"], r["method"])
+                == ("sphere-distance", 1e10, "mitsuba-scalar_rgb")
+                and r["metric"].startswith("t_error")]  # fmt: skip
+    assert value(rows, "sphere-distance", 1e10, "rtlab", "both_hits") > 0.1
+    assert value(rows, "sphere-distance", 1e10, "rtlab", "t_error_ulps_median") <= 4
+    html = (out / "index.html").read_text()
+    assert re.search(r'alt="sphere-distance:[^"]*mitsuba-scalar_rgb at most [^"(]*\(no data at '
+                     r"1e\+10\)", html)  # fmt: skip

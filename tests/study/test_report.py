@@ -50,3 +50,55 @@ def test_pareto_plot_is_written_with_alt_text(tmp_path):
     assert (tmp_path / "pareto.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "on the Pareto front a, b" in alt and "fewest wrong: b" in alt
     json.dumps(pareto_points(ROWS), allow_nan=False)  # valid JSON: no NaN
+
+
+def test_a_method_that_hits_nothing_has_no_t_error_not_zero():
+    """The flaw fixed: a method that misses every ray reported t error 0 (perfect). Now the t
+    metrics are left out where no ray is a hit for both, both_hits says so, and a knob value's
+    t error is over the cases that have one."""
+    import numpy as np
+
+    from study import metrics, truth
+    from study.families import Case
+    from study.methods import Method, Traced, _rtlab_trace
+    from study.run import _Acc
+    from study.shapes import Sphere
+
+    def misses(shape, o, d):
+        n = len(o)
+        return Traced(np.zeros(n, dtype=bool), np.full(n, np.inf), np.zeros((n, 3)), None,
+                      np.zeros((n, 3)))  # fmt: skip
+
+    sphere = Sphere((0.0, 0.0, 0.0), 1.0)
+    o = np.array([[0.0, 0.0, 5.0]] * 4)
+    d = np.array([[0.0, 0.0, -1.0], [0.1, 0.0, -1.0], [0.0, 0.1, -1.0], [0.0, 0.0, 1.0]])
+    case = Case(sphere, o, d)
+    tru = truth.truth(sphere, o, d)
+    blind = Method("blind", "1", frozenset({"sphere"}), misses, None, None, "double")  # type: ignore[arg-type]
+    m, _, _ = metrics.decision(case, blind, tru)
+    assert m["both_hits"] == 0 and m["wrong_decisions"] == 0.75
+    assert not any(k.startswith("t_error") for k in m)
+    seeing = Method("rtlab", "1", frozenset({"sphere"}), _rtlab_trace, None, None, "double")  # type: ignore[arg-type]
+    m2, _, _ = metrics.decision(case, seeing, tru)
+    assert m2["both_hits"] == 0.75 and m2["t_error_ulps_max"] <= 4
+    # Over two cases, one without t: the median is the other's, not halved by a 0.
+    acc = _Acc()
+    acc.add(m, 4, 0)
+    acc.add(m2, 4, 0)
+    assert acc.values()["t_error_ulps_median"] == m2["t_error_ulps_median"]
+    assert acc.values()["both_hits"] == 0.75 / 2
+
+
+def test_the_family_plot_says_no_data(tmp_path):
+    from study.families import FAMILIES
+    from study.report import plot_family
+
+    fam = FAMILIES["grazing"]
+    rows = [_row("grazing", k, m, fam.metric, 0.0) for k in (4.0, 20.0) for m in ("a", "b")]
+    rows += [_row("grazing", k, "a", t, 2.0) for k in (4.0, 20.0)
+             for t in ("t_error_ulps_median", "t_error_ulps_max")]  # fmt: skip
+    rows += [_row("grazing", 4.0, "b", t, 1.0) for t in ("t_error_ulps_median", "t_error_ulps_max")]
+    alt = plot_family(fam, rows, tmp_path / "g.png")
+    assert "a at most 2 ulps" in alt
+    assert "b at most 1 ulps (no data at 20)" in alt  # b's 20: no ray a hit for both
+    assert (tmp_path / "g.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
