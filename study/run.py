@@ -81,6 +81,21 @@ def _hex(v: np.ndarray) -> list[str]:
     return [float(x).hex() for x in v]
 
 
+def _protocol_fields(case: Case, i: int) -> dict[str, Any]:
+    """What replaying ray i of the case needs beyond its origin and direction (study/freeze.py):
+    the protocol, and its spawned direction and side, its light, or its scale."""
+    out: dict[str, Any] = {"protocol": case.protocol}
+    if case.leave is not None:
+        out["leave"] = _hex(case.leave[i])
+    if case.outward is not None:
+        out["outward"] = bool(case.outward[i])
+    if case.light is not None:
+        out["light"] = [float(x).hex() for x in case.light]
+    if case.protocol == "scale":
+        out["scale_k"] = case.scale_k
+    return out
+
+
 def _evaluate(case: Case, method: Method, tru: truth.Truth | None) -> metrics.Result:
     if case.protocol == "decision":
         assert tru is not None
@@ -130,7 +145,7 @@ def run_family(
                             "version": method.version, "metric": metric,
                             "shape": {"kind": case.shape.kind} | case.shape.scene_object(),
                             "origin": _hex(case.origins[i]), "direction": _hex(case.directions[i]),
-                        })  # fmt: skip
+                        } | _protocol_fields(case, int(i)))  # fmt: skip
         for method in all_methods:
             if method.name not in acc:
                 continue

@@ -165,7 +165,8 @@ def test_the_precision_lesson_links_to_the_study(site, browser):
     page.wait_for_load_state("load")
     assert page.url == (site / "study" / "index.html").resolve().as_uri()
     assert_offline_and_whole(page, requests, errors, site)
-    assert len(images_of(page)) == len(FAMILIES)  # a plot per family, each with its alt text
+    # a plot per family and the Pareto plot, each with its alt text
+    assert len(images_of(page)) == len(FAMILIES) + 1
 
 
 def test_the_verb_writes_one_family(tmp_path, capsys):
