@@ -6,6 +6,7 @@ run time of every method as a Pareto plot (pareto.png, its numbers in pareto.jso
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 from typing import Any
 
@@ -43,7 +44,10 @@ def plot_family(family: Family, rows: list[dict[str, Any]], path: Path) -> str:
 
     from tracer.image import atomic_path
 
-    mine = [r for r in rows if r["family"] == family.name and r["metric"] == family.metric]
+    # A null value (an infinite error, study/run.py _json_value) is inf again: the line leaves
+    # it out, the alt text says "at most inf".
+    mine = [r | {"value": math.inf if r["value"] is None else r["value"]} for r in rows
+            if r["family"] == family.name and r["metric"] == family.metric]  # fmt: skip
     fig, (ax, tax) = plt.subplots(1, 2, figsize=(11.0, 4.0), dpi=100)
     knobs = sorted({r["knob_value"] for r in mine})
     xs, label = _x(family, knobs)

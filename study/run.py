@@ -171,7 +171,8 @@ def breakdown(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
             if metric is None:
                 continue
             over = sorted(r["knob_value"] for r in mine if r["method"] == method
-                          and r["metric"] == metric and r["value"] > BREAKDOWN)  # fmt: skip
+                          and r["metric"] == metric
+                          and (r["value"] is None or r["value"] > BREAKDOWN))  # fmt: skip
             entry: dict[str, Any] = {
                 "family": family.name,
                 "knob": family.knob,
