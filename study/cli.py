@@ -1,5 +1,6 @@
-"""``rtlab study stiff --out DIR [--quick] [--family NAME]``: the verb's work (its entry in the
-parser lives in tracer/cli.py beside the other verbs)."""
+"""``rtlab study stiff --out DIR [--quick] [--family NAME]`` and ``rtlab study freeze --from
+DIR/failures.json --out tests/study/frozen``: the verb's work (its entry in the parser lives in
+tracer/cli.py beside the other verbs)."""
 
 from __future__ import annotations
 
@@ -15,10 +16,32 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     p.add_argument("--quick", action="store_true",
                    help="a fixed-seed subset: a few knob values, 1000 rays each")  # fmt: skip
     p.add_argument("--family", help="one family only (default: all)")
+    f = sub.add_parser("freeze", help="freeze failing rays of a run as regression tests")
+    f.add_argument("--from", dest="source", required=True,
+                   help="a run's failures.json (from rtlab study stiff)")  # fmt: skip
+    f.add_argument("--out", required=True, help="where FAMILY.json go, e.g. tests/study/frozen")
+    f.add_argument("--per", type=int, default=2,
+                   help="rays kept per family, method and metric (default 2)")  # fmt: skip
+
+
+def freeze(args: argparse.Namespace) -> int:
+    from study.freeze import FreezeError, write_frozen
+
+    try:
+        counts = write_frozen(Path(args.source), Path(args.out), per=args.per)
+    except FreezeError as error:
+        print(f"rtlab: error: {error}", file=sys.stderr)
+        return 2
+    said = ", ".join(f"{family} {n}" for family, n in counts.items()) or "none"
+    print(f"rtlab: froze {sum(counts.values())} rays into {args.out}: {said}")
+    return 0
 
 
 def run(args: argparse.Namespace) -> int:
-    """Exit status: 0 done; 2 bad input (an unknown family, an --out that is a file)."""
+    """Exit status: 0 done; 2 bad input (an unknown family, an --out that is a file, a
+    failures.json that is missing or not one)."""
+    if args.study_command == "freeze":
+        return freeze(args)
     from study.run import StudyError
     from study.run import run as run_study
 

@@ -10,24 +10,34 @@ one, the normal), ``spawn`` (where a ray leaving a hit towards a direction start
   the slab test, t = (p0 - o).n / d.n, and a fixed offset of 1e-4 along the normal for spawned
   rays. The float one rounds the scene and the rays to float32 first, as a float renderer does:
   that rounding is part of its error (it is judged on the double rays, like every method).
+- ``rtlab-float``: rtlab's own robust algorithms (the same headers, ported to numpy in
+  study/rtlab_float.py) in float32, with gamma(n) of float's unit roundoff and its own spawn
+  (offset_ray_origin by its own error bound) and occluded: what robustness buys in float,
+  beside textbook-float.
 - ``mitsuba-scalar_rgb`` / ``mitsuba-llvm_ad_rgb``: mi.Scene.ray_intersect on the same rays
   (spheres; triangles, meshes and boxes as an mi.Mesh of their triangles), version
-  mi.__version__.
+  mi.__version__; spawned rays by Mitsuba's own SurfaceInteraction3f.spawn_ray (offset by its
+  own error estimate), shadow rays by Scene.ray_test, shortened as spawn_ray_to does.
 - ``embree`` / ``embree-robust``: Embree's rtcIntersect1 through embreex (its EmbreeScene's
   ``robust`` flag sets RTC_SCENE_FLAG_ROBUST), triangles, meshes and boxes as triangles in
-  float, version "embreex X / Embree Y".
+  float, version "embreex X / Embree Y"; shadow rays by rtcOccluded1; Embree has no spawn, so
+  what its user does: tnear = 0.001f on a ray from the hit point (Embree's tutorials).
 """
 
 from __future__ import annotations
 
+import contextlib
 import functools
+import gc
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
+from study import rtlab_float
 from study.shapes import Mesh, Plane, Shape, Sphere, Triangle, as_mesh
 
 Array = npt.NDArray[np.float64]
@@ -228,10 +238,18 @@ def _mitsuba(variant: str) -> object:
     return mi
 
 
+def _use(mi: Any, variant: str) -> None:
+    """Switch Mitsuba to ``variant`` only if it is not the current one: a switch costs about
+    5 ms (measured: 1200 round trips scalar_rgb <-> llvm_ad_rgb in 11.5 s), which a timed call
+    would otherwise count as the method's time."""
+    if mi.variant() != variant:
+        mi.set_variant(variant)
+
+
 @functools.lru_cache(maxsize=32)
 def _mi_scene(variant: str, shape: Shape) -> object:
     mi = _mitsuba(variant)
-    mi.set_variant(variant)
+    _use(mi, variant)
     if isinstance(shape, Sphere):
         return mi.load_dict(
             {
@@ -265,37 +283,105 @@ def _mi_scene(variant: str, shape: Shape) -> object:
 def _mitsuba_trace(variant: str) -> Callable[[Shape, Array, Array], Traced]:
     def trace(shape: Shape, o: Array, d: Array) -> Traced:
         mi = _mitsuba(variant)
-        mi.set_variant(variant)
+        _use(mi, variant)
         scene = _mi_scene(variant, shape)
         n = len(o)
         t = np.full(n, np.inf)
         p = np.zeros((n, 3))
         nn = np.zeros((n, 3))
-        if variant.startswith("scalar"):
-            for i in range(n):
-                si = scene.ray_intersect(mi.Ray3f(mi.Point3f(*o[i]), mi.Vector3f(*d[i])))
-                if si.is_valid():
-                    t[i], p[i], nn[i] = si.t, list(si.p), list(si.n)
-        else:
-            ox, oy, oz = (o[:, k].astype(np.float32) for k in range(3))
-            dx, dy, dz = (d[:, k].astype(np.float32) for k in range(3))
-            ray = mi.Ray3f(mi.Point3f(ox, oy, oz), mi.Vector3f(dx, dy, dz))
-            si = scene.ray_intersect(ray)
-            valid = np.array(si.is_valid(), dtype=bool)
-            t = np.where(valid, np.array(si.t, dtype=np.float64), np.inf)
-            p = np.array(si.p, dtype=np.float64).reshape(3, n).T
-            nn = np.array(si.n, dtype=np.float64).reshape(3, n).T
-        return Traced(np.isfinite(t), t, p, None, nn)
+        with _no_gc():
+            return _mitsuba_intersect(mi, variant, scene, o, d, t, p, nn)
 
     return trace
 
 
-def _unsupported_spawn(tr: Traced, toward: Array) -> Array:
-    raise NotImplementedError("spawned rays are not measured for this method yet")
+def _mitsuba_intersect(mi: Any, variant: str, scene: Any, o: Array, d: Array, t: Array,
+                       p: Array, nn: Array) -> Traced:  # fmt: skip
+    """Scene.ray_intersect on each ray (scalar_rgb: one call a ray; llvm: one call for all)."""
+    n = len(o)
+    if variant.startswith("scalar"):
+        for i in range(n):
+            si = scene.ray_intersect(mi.Ray3f(mi.Point3f(*o[i]), mi.Vector3f(*d[i])))
+            if si.is_valid():
+                t[i], p[i], nn[i] = si.t, list(si.p), list(si.n)
+    else:
+        ox, oy, oz = (o[:, k].astype(np.float32) for k in range(3))
+        dx, dy, dz = (d[:, k].astype(np.float32) for k in range(3))
+        ray = mi.Ray3f(mi.Point3f(ox, oy, oz), mi.Vector3f(dx, dy, dz))
+        si = scene.ray_intersect(ray)
+        valid = np.array(si.is_valid(), dtype=bool)
+        t = np.where(valid, np.array(si.t, dtype=np.float64), np.inf)
+        p = np.array(si.p, dtype=np.float64).reshape(3, n).T
+        nn = np.array(si.n, dtype=np.float64).reshape(3, n).T
+    return Traced(np.isfinite(t), t, p, None, nn)
 
 
-def _unsupported_occluded(shape: Shape, o: Array, d: Array, tmax: Array) -> np.ndarray:
-    raise NotImplementedError("shadow rays are not measured for this method yet")
+@contextlib.contextmanager
+def _no_gc() -> Iterator[None]:
+    """No cycle collection while Dr.Jit runs: a plugin instance freed by the collector in the
+    middle of a call is what "callable 0 returned an empty/uninitialized Dr.Jit array" means
+    (reports/plots.py, which collects before and disables the collector during a render)."""
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if enabled:
+            gc.enable()
+
+
+def _mitsuba_spawn(variant: str) -> Callable[[Traced, Array], Array]:
+    """Mitsuba's own spawn: SurfaceInteraction3f.spawn_ray(d) on the hit's point and normal
+    (si.p, si.n as its ray_intersect returned them); its offset_p() moves p along n by
+    (1 + max |p_i|) RayEpsilon (RayEpsilon = 1500 float epsilons: Mitsuba's own estimate of the
+    hit point's error, relative to the point's size), to the side d points to."""
+
+    def spawn(tr: Traced, toward: Array) -> Array:
+        mi = _mitsuba(variant)
+        _use(mi, variant)
+        with _no_gc():
+            if variant.startswith("scalar"):
+                out = np.zeros_like(tr.p)
+                for i in range(len(tr.p)):
+                    si = mi.SurfaceInteraction3f()
+                    si.p, si.n = mi.Point3f(*tr.p[i]), mi.Normal3f(*tr.n[i])
+                    out[i] = list(si.spawn_ray(mi.Vector3f(*toward[i])).o)
+                return out
+            si = mi.SurfaceInteraction3f()
+            si.p = mi.Point3f(*(mi.Float(tr.p[:, k].astype(np.float32)) for k in range(3)))
+            si.n = mi.Normal3f(*(mi.Float(tr.n[:, k].astype(np.float32)) for k in range(3)))
+            d = mi.Vector3f(*(mi.Float(toward[:, k].astype(np.float32)) for k in range(3)))
+            o = si.spawn_ray(d).o
+            return np.array(o, dtype=np.float64).reshape(3, -1).T
+
+    return spawn
+
+
+def _mitsuba_occluded(variant: str) -> Callable[[Shape, Array, Array, Array], np.ndarray]:
+    """Mitsuba's shadow test: Scene.ray_test on the ray with maxt = tmax (1 - ShadowEpsilon),
+    the shortening its spawn_ray_to() gives a ray towards a point (ShadowEpsilon = 10
+    RayEpsilon), so that the point's own surface does not block it."""
+
+    def occluded(shape: Shape, o: Array, d: Array, tmax: Array) -> npt.NDArray[np.bool_]:
+        mi = _mitsuba(variant)
+        _use(mi, variant)
+        scene = _mi_scene(variant, shape)
+        reach = tmax * (1 - float(mi.math.ShadowEpsilon))
+        with _no_gc():
+            if variant.startswith("scalar"):
+                out = np.zeros(len(o), dtype=bool)
+                for i in range(len(o)):
+                    ray = mi.Ray3f(mi.Point3f(*o[i]), mi.Vector3f(*d[i]))
+                    ray.maxt = float(reach[i])
+                    out[i] = bool(scene.ray_test(ray))
+                return out
+            o3 = (mi.Float(o[:, k].astype(np.float32)) for k in range(3))
+            d3 = (mi.Float(d[:, k].astype(np.float32)) for k in range(3))
+            ray = mi.Ray3f(mi.Point3f(*o3), mi.Vector3f(*d3))
+            ray.maxt = mi.Float(reach.astype(np.float32))
+            return np.array(scene.ray_test(ray), dtype=bool)
+
+    return occluded
 
 
 # ----------------------------------------------------------------------------------- Embree
@@ -320,13 +406,46 @@ def _embree_trace(robust: bool) -> Callable[[Shape, Array, Array], Traced]:
         d32 = np.ascontiguousarray(d, dtype=np.float32)
         r = scene.run(o32, d32, query="INTERSECT", output=1)  # type: ignore[attr-defined]
         hit = np.asarray(r["geomID"]) >= 0
-        t = np.where(hit, np.asarray(r["tfar"], dtype=np.float64), np.inf)
-        with np.errstate(invalid="ignore"):
-            p = o + t[:, None] * d
+        t32 = np.asarray(r["tfar"], dtype=np.float32)
+        t = np.where(hit, t32.astype(np.float64), np.inf)
+        with np.errstate(invalid="ignore", over="ignore"):
+            # The hit point as Embree's tutorials compute it, ray.org + ray.tfar * ray.dir, in
+            # float (Embree returns t, not a point).
+            p = (o32 + t32[:, None] * d32).astype(np.float64)
         n = np.asarray(r["Ng"], dtype=np.float64)
         return Traced(hit, t, p, None, n)
 
     return trace
+
+
+#: Embree has no spawn: its user starts the new ray at the hit point with a ray segment that
+#: begins a little ahead, tnear; 0.001f is the value of Embree's own tutorials ("Ray
+#: shadow(ray.org + ray.tfar*ray.dir, neg(lightDir), 0.001f, inf)").
+EMBREE_TNEAR = np.float32(1e-3)
+
+
+def _embree_spawn(tr: Traced, toward: Array) -> Array:
+    """The ray from the hit point with tnear = EMBREE_TNEAR along the unit direction. embreex
+    fixes tnear at 0, so the origin is moved there instead, p + tnear d (in float, like the
+    point: the same ray segment in real arithmetic, one more rounding of the size of p's ulp)."""
+    p = tr.p.astype(np.float32)
+    with np.errstate(all="ignore"):  # missed rays (an infinite point) are not spawned
+        d = toward / np.linalg.norm(toward, axis=1)[:, None]
+        return (p + EMBREE_TNEAR * d.astype(np.float32)).astype(np.float64)
+
+
+def _embree_occluded(robust: bool) -> Callable[[Shape, Array, Array, Array], np.ndarray]:
+    """rtcOccluded1 through embreex (query "OCCLUDED"): anything in (tnear = 0, tfar = tmax)."""
+
+    def occluded(shape: Shape, o: Array, d: Array, tmax: Array) -> npt.NDArray[np.bool_]:
+        scene = _embree_scene(robust, shape)
+        o32 = np.ascontiguousarray(o, dtype=np.float32)
+        d32 = np.ascontiguousarray(d, dtype=np.float32)
+        far = np.ascontiguousarray(np.broadcast_to(tmax, len(o)), dtype=np.float32)
+        ids = scene.run(o32, d32, dists=far, query="OCCLUDED")  # type: ignore[attr-defined]
+        return np.asarray(ids) >= 0  # the geometry's id where occluded, -1 where not
+
+    return occluded
 
 
 def embree_version() -> str:
@@ -365,6 +484,7 @@ def methods(include_mitsuba: bool = True, include_embree: bool = True) -> list[M
                _textbook_spawn(np.float64), _textbook_occluded(np.float64), "double"),
         Method("textbook-float", "1", frozenset(ALL), _textbook(np.float32),
                _textbook_spawn(np.float32), _textbook_occluded(np.float32), "float"),
+        Method("rtlab-float", "1", frozenset(ALL), *rtlab_float.port(np.float32), "float"),
     ]  # fmt: skip
     if include_mitsuba:
         version = mitsuba_version()
@@ -375,10 +495,9 @@ def methods(include_mitsuba: bool = True, include_embree: bool = True) -> list[M
                     version,
                     frozenset({"sphere", "triangle", "mesh", "box", "cylinder"}),
                     _mitsuba_trace(variant),
-                    _unsupported_spawn,
-                    _unsupported_occluded,
+                    _mitsuba_spawn(variant),
+                    _mitsuba_occluded(variant),
                     "float",
-                    frozenset({"decision"}),
                 )
             )
     if include_embree:
@@ -386,8 +505,7 @@ def methods(include_mitsuba: bool = True, include_embree: bool = True) -> list[M
         for robust in (False, True):
             out.append(Method("embree-robust" if robust else "embree", version,
                               frozenset({"triangle", "mesh", "box"}), _embree_trace(robust),
-                              _unsupported_spawn, _unsupported_occluded, "float",
-                              frozenset({"decision"})))  # fmt: skip
+                              _embree_spawn, _embree_occluded(robust), "float"))  # fmt: skip
     return out
 
 

@@ -4,7 +4,11 @@ rays the method traced:
 - ``wrong_decisions``: share of decidable rays whose hit/miss differs from the truth (rays a
   one-ulp move decides differently are counted apart, in ``undecidable``);
 - ``t_error_ulps_median`` / ``t_error_ulps_max``: |t - t_true| in ulps of t_true, over the rays
-  both call a hit; ``t_error_ulps_max_separated``: over those whose roots are well apart;
+  both call a hit; ``t_error_ulps_max_separated``: over those whose roots are well apart; left
+  out (no row) where no ray is a hit for both, never 0 for "no data"; a knob value's median is
+  the mean of its cases' medians weighted by their rays;
+- ``both_hits``: share of the rays that the method and the truth both call a (decidable) hit:
+  what the t metrics are over;
 - ``bound_violations``: share of hit points whose own error box holds no point of the true
   surface (methods that report a bound: rtlab);
 - ``self_hits``: share of spawned rays that meet the surface they leave (an outward ray at all;
@@ -69,18 +73,21 @@ def decision(case: Case, method: Method, tru: oracle.Truth) -> Result:
     sep = both & (tru.separation >= 0.5)
     m: dict[str, float] = {
         "wrong_decisions": _share(wrong, decidable),
-        "t_error_ulps_median": float(np.nanmedian(err)) if both.any() else 0.0,
-        "t_error_ulps_max": float(np.nanmax(err)) if both.any() else 0.0,
-        # Where the roots are well apart (half chord >= r / 2): t is well conditioned there.
-        "t_error_ulps_max_separated": float(np.nanmax(np.where(sep, err, np.nan)))
-        if sep.any()
-        else 0.0,
+        # How many rays the t metrics are over: where it is 0 they are left out (a method that
+        # hits nothing has no t error, not a t error of 0).
+        "both_hits": _share(both, np.ones(len(both), dtype=bool)),
         "nan_inf": _nan_inf(tr),
         "time_per_ray_s": seconds / len(case.origins),
         # Inside the band no method is wrong, but which way it goes says which convention it
         # follows (rtlab: edges and faces belong to the shape, like the truth).
         "undecidable_differs": _share(tr.hit != tru.hit, tru.undecidable),
     }
+    if both.any():
+        m["t_error_ulps_median"] = float(np.nanmedian(err))
+        m["t_error_ulps_max"] = float(np.nanmax(err))
+    if sep.any():
+        # Where the roots are well apart (half chord >= r / 2): t is well conditioned there.
+        m["t_error_ulps_max_separated"] = float(np.nanmax(np.where(sep, err, np.nan)))
     fails = {"wrong_decisions": np.flatnonzero(wrong)}
     if case.shape.kind == "mesh":
         # A closed mesh: a decidable true hit reported as a miss went through a crack.
@@ -115,7 +122,9 @@ def spawn(case: Case, method: Method) -> Result:
         self_hit = hit & tr2.hit
         missed = np.zeros(len(hit), dtype=bool)
     want = np.where(case.outward, 1, -1)
-    wrong_side = np.array([bool(h) and oracle.side(case.shape, p) != w
+    # A spawned origin that is not finite (a float method's offset overflowed) is on no side.
+    wrong_side = np.array([bool(h) and (not np.all(np.isfinite(p))
+                                        or oracle.side(case.shape, p) != w)
                            for h, p, w in zip(hit, o2, want, strict=True)])  # fmt: skip
     m = {
         "self_hits": _share(self_hit, hit),

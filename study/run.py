@@ -49,26 +49,52 @@ class _Acc:
     rays: int = 0
     undecidable: int = 0
     sums: dict[str, float] | None = None
+    weights: dict[str, int] | None = None  # the rays of the cases that report each metric
     maxima: dict[str, float] | None = None
 
     def add(self, m: dict[str, float], rays: int, undecidable: int) -> None:
         self.sums = self.sums or {}
+        self.weights = self.weights or {}
         self.maxima = self.maxima or {}
         for k, v in m.items():
-            if k.endswith("_max"):
+            if k.endswith("_max") or k.endswith("_max_separated"):
                 self.maxima[k] = max(self.maxima.get(k, 0.0), v)
             else:
                 self.sums[k] = self.sums.get(k, 0.0) + v * rays
+                self.weights[k] = self.weights.get(k, 0) + rays
         self.rays += rays
         self.undecidable += undecidable
 
     def values(self) -> dict[str, float]:
-        out = {k: v / self.rays for k, v in (self.sums or {}).items()}
+        """Each metric over the cases that report it (a case with no ray that both the method
+        and the truth hit reports no t error: it is left out, not counted as 0)."""
+        weights = self.weights or {}
+        out = {k: v / weights[k] for k, v in (self.sums or {}).items()}
         return out | dict(self.maxima or {})
+
+
+def _json_value(v: float) -> float | None:
+    """A row's value as JSON has it: NaN and infinities (an overflowed t error) are null."""
+    return v if np.isfinite(v) else None
 
 
 def _hex(v: np.ndarray) -> list[str]:
     return [float(x).hex() for x in v]
+
+
+def _protocol_fields(case: Case, i: int) -> dict[str, Any]:
+    """What replaying ray i of the case needs beyond its origin and direction (study/freeze.py):
+    the protocol, and its spawned direction and side, its light, or its scale."""
+    out: dict[str, Any] = {"protocol": case.protocol}
+    if case.leave is not None:
+        out["leave"] = _hex(case.leave[i])
+    if case.outward is not None:
+        out["outward"] = bool(case.outward[i])
+    if case.light is not None:
+        out["light"] = [float(x).hex() for x in case.light]
+    if case.protocol == "scale":
+        out["scale_k"] = case.scale_k
+    return out
 
 
 def _evaluate(case: Case, method: Method, tru: truth.Truth | None) -> metrics.Result:
@@ -89,7 +115,7 @@ def _applies(method: Method, case: Case) -> bool:
         return chains.applies(method, case)
     if case.shape.kind not in method.kinds:
         return False
-    # Mitsuba and Embree are measured on first hits only this far (spawn and shadow: to come).
+    # Every method has spawn and occluded now; a method may still name fewer protocols.
     return case.protocol in method.protocols
 
 
@@ -124,7 +150,7 @@ def run_family(
                             "version": method.version, "metric": metric,
                             "shape": {"kind": case.shape.kind} | case.shape.scene_object(),
                             "origin": _hex(case.origins[i]), "direction": _hex(case.directions[i]),
-                        })  # fmt: skip
+                        } | _protocol_fields(case, int(i)))  # fmt: skip
         for method in all_methods:
             if method.name not in acc:
                 continue
@@ -133,7 +159,7 @@ def run_family(
                 rows.append({
                     "family": family.name, "knob": family.knob, "knob_value": value,
                     "method": method.name, "version": method.version, "metric": metric,
-                    "value": v, "rays": a.rays, "undecidable": a.undecidable,
+                    "value": _json_value(v), "rays": a.rays, "undecidable": a.undecidable,
                 })  # fmt: skip
     return rows, failures
 
@@ -150,7 +176,8 @@ def breakdown(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
             if metric is None:
                 continue
             over = sorted(r["knob_value"] for r in mine if r["method"] == method
-                          and r["metric"] == metric and r["value"] > BREAKDOWN)  # fmt: skip
+                          and r["metric"] == metric
+                          and (r["value"] is None or r["value"] > BREAKDOWN))  # fmt: skip
             entry: dict[str, Any] = {
                 "family": family.name,
                 "knob": family.knob,
@@ -196,7 +223,7 @@ def run(out: Path, quick: bool = False, family: str | None = None,
     for name, data in (("rows.json", rows), ("breakdown.json", brk),
                        ("failures.json", failures)):  # fmt: skip
         with atomic_path(out / name) as tmp:
-            tmp.write_text(json.dumps(data, indent=1) + "\n")
+            tmp.write_text(json.dumps(data, indent=1, allow_nan=False) + "\n")
     from study.report import write_report
 
     write_report(out, families, rows, brk, failures, quick=quick, seconds=seconds)

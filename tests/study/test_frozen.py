@@ -1,8 +1,14 @@
 """Rays the study found rtlab failing on until 15_triangle.h was fixed, frozen as hex floats
 (from failures.json of `rtlab study stiff --quick`, family triangles, knob 1): the truth, the
-textbook formula and rtlab on each, without running the study."""
+textbook formula and rtlab on each, without running the study. And the rays other methods fail
+on, frozen per family in tests/study/frozen/ (study/freeze.py): the truth decides each, rtlab
+gets each right, and the method it was frozen for still fails it."""
 
 from __future__ import annotations
+
+import functools
+import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,6 +16,7 @@ import pytest
 from study import truth
 from study.methods import _rtlab_trace, _textbook
 from study.shapes import Triangle
+from tracer.cli import main
 
 #: (vertices, origin, direction): rays nearly in the triangle's plane (within 1e-12 radians),
 #: aimed at interior points; the exact answer is a hit no one-ulp move flips.
@@ -85,3 +92,63 @@ def test_rtlab_hits_them(entry):
     the plane and heads into it (starts_off_the_plane_heading_in): regression rays."""
     tri, o, d = _case(entry)
     assert _rtlab_trace(tri, o, d).hit[0]
+
+
+# ------------------------------------------------- rays frozen from the study's failures.json
+
+FROZEN = Path(__file__).parent / "frozen"
+ENTRIES = [(p.stem, i, e) for p in sorted(FROZEN.glob("*.json"))
+           for i, e in enumerate(json.loads(p.read_text()))]  # fmt: skip
+
+
+@functools.cache
+def _methods():
+    from study.methods import methods
+
+    return {m.name: m for m in methods()}
+
+
+def test_rays_are_frozen_for_most_families_and_methods():
+    """Written by `rtlab study freeze --from OUT/failures.json --out tests/study/frozen` from
+    the quick run (`rtlab study stiff --quick --out OUT`)."""
+    assert len({f for f, _, _ in ENTRIES}) >= 6
+    assert {e["method"] for _, _, e in ENTRIES} >= {"textbook-double", "textbook-float",
+                                                    "rtlab-float", "embree"}  # fmt: skip
+    assert {e["protocol"] for _, _, e in ENTRIES} >= {"decision", "spawn", "shadow"}
+
+
+IDS = [f"{f}-{i}-{e['method']}-{e['metric']}" for f, i, e in ENTRIES]
+
+
+@pytest.mark.parametrize(("family", "index", "entry"), ENTRIES, ids=IDS)
+def test_frozen_ray_rtlab_right_and_the_failure_reproduced(family, index, entry):
+    from study.freeze import failing_metrics
+
+    # The truth still decides it, and rtlab gets it right.
+    assert failing_metrics(entry, _methods()["rtlab"]) == set()
+    method = _methods()[entry["method"]]
+    if method.version != entry["version"]:
+        pytest.skip(f"{method.name} is {method.version} here, the ray was frozen with "
+                    f"{entry['version']}")  # fmt: skip
+    # And the method it was frozen for still fails it the same way: still a stiff ray.
+    assert entry["metric"] in failing_metrics(entry, method)
+
+
+def test_freeze_picks_a_few_per_method_and_refuses_bad_input(tmp_path, capsys):
+    from study.freeze import freeze
+
+    base = ENTRIES[0][2] | {"method": "textbook-float"}
+    fails = [base | {"knob_value": k, "method": m} for k in (1.0, 1.0, 2.0, 3.0)
+             for m in ("textbook-float", "rtlab")]  # fmt: skip
+    (entries,) = freeze(fails, per=2).values()
+    # Two per method and metric, from different knob values; rtlab's failures are bugs to
+    # fix, not rays to freeze.
+    picked = [(e["method"], e["knob_value"]) for e in entries]
+    assert picked == [("textbook-float", 1.0), ("textbook-float", 2.0)]
+    assert main(["study", "freeze", "--from", str(tmp_path / "none.json"), "--out",
+                 str(tmp_path)]) == 2  # fmt: skip
+    assert "none.json: no such file" in capsys.readouterr().err
+    (tmp_path / "f.json").write_text(json.dumps(fails))
+    assert main(["study", "freeze", "--from", str(tmp_path / "f.json"), "--out",
+                 str(tmp_path / "fz")]) == 0  # fmt: skip
+    assert len(json.loads((tmp_path / "fz" / f"{base['family']}.json").read_text())) == 2

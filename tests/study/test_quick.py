@@ -124,7 +124,8 @@ def test_breakdown_and_pages(quick):
     assert by[("sphere-distance", "textbook-double")] == 1e5
     html = (out / "index.html").read_text()
     images = re.findall(r"<img [^>]*>", html)
-    assert len(images) == len(FAMILIES) >= 12  # 9 and study/families_scenes.py's 3
+    # The nine first families and study/families_scenes.py's five; pareto.png is no family's.
+    assert len([i for i in images if "pareto.png" not in i]) == len(FAMILIES) >= 14
     assert all(re.search(r'alt="[^"]{20,}"', i) for i in images)
     for i in images:
         src = re.search(r'src="([^"]+)"', i).group(1)
@@ -165,7 +166,8 @@ def test_the_precision_lesson_links_to_the_study(site, browser):
     page.wait_for_load_state("load")
     assert page.url == (site / "study" / "index.html").resolve().as_uri()
     assert_offline_and_whole(page, requests, errors, site)
-    assert len(images_of(page)) == len(FAMILIES)  # a plot per family, each with its alt text
+    # a plot per family and the Pareto plot, each with its alt text
+    assert len(images_of(page)) == len(FAMILIES) + 1
 
 
 def test_the_verb_writes_one_family(tmp_path, capsys):
@@ -277,3 +279,67 @@ def test_truth_on_degenerate_triangles_and_shared_edges():
         v = [tuple(x) for x in rng.normal(size=(3, 3))]
         oo, dd = rng.normal(size=3) * 3, rng.normal(size=3)
         assert truth._triangle_hits(v, oo, dd) == truth.first_hit(Triangle(*v), oo, dd)[0]
+
+
+def test_rtlab_float_robust_spawn_where_the_textbook_float_self_hits(quick):
+    """rtlab's own algorithms in float (study/rtlab_float.py): the spawn offset by the hit's
+    own error bound leaves the surface at every scale, where the fixed 1e-4 of the textbook
+    in float does not (at 1e8 float's ulp is 8)."""
+    _, rows = quick
+    for knob in (1e-8, 1.0, 1e8):
+        for metric in ("self_hits", "missed_far", "wrong_side"):
+            assert value(rows, "self-intersection", knob, "rtlab-float", metric) == 0
+    assert value(rows, "self-intersection", 1e8, "textbook-float", "self_hits") > 0.1
+    # Its bounds hold in float too (gamma(n) of float's unit roundoff).
+    assert all(r["value"] == 0 for r in rows
+               if r["method"] == "rtlab-float" and r["metric"] == "bound_violations")  # fmt: skip
+
+
+def test_mitsuba_and_embree_on_the_spawn_and_shadow_protocols(quick):
+    _, rows = quick
+    for m in ("mitsuba-scalar_rgb", "mitsuba-llvm_ad_rgb", "embree", "embree-robust"):
+        assert any(r["method"] == m and r["metric"] == "self_hits" for r in rows), m
+    for m in ("mitsuba-scalar_rgb", "mitsuba-llvm_ad_rgb"):
+        assert any(r["method"] == m and r["metric"] == "false_occlusions" for r in rows), m
+        # spawn_ray's offset scales with the point (1 + max |p|) RayEpsilon: no self-hit at 1e8
+        assert value(rows, "self-intersection", 1e8, m, "self_hits") == 0
+        # but its "1 +" is an absolute 9e-5 floor that jumps past a shape of size 1e-8.
+        assert value(rows, "self-intersection", 1e-8, m, "missed_far") > 0.1
+    # Embree's user's fixed tnear = 0.001f is below float's ulp at 1e8 (8): self-hits.
+    assert value(rows, "self-intersection", 1e8, "embree", "self_hits") > 0.1
+    assert value(rows, "self-intersection", 1.0, "embree", "self_hits") == 0
+
+
+def test_error_against_run_time_as_a_pareto_plot(quick):
+    out, _ = quick
+    points = {p["method"]: p for p in json.loads((out / "pareto.json").read_text())}
+    assert set(points) >= {"rtlab", "textbook-double", "textbook-float", "rtlab-float",
+                           "mitsuba-scalar_rgb", "embree"}  # fmt: skip
+    # rtlab is never wrong and (one C++ call for the batch) faster than the numpy textbook in
+    # double, which the front therefore leaves out.
+    assert points["rtlab"]["common_error"] == 0 and points["rtlab"]["common_front"]
+    assert not points["textbook-double"]["common_front"]
+    # What robust algorithms buy in float: fewer wrong answers than the textbook in float on
+    # the same rays (self-hits above all; first hits in float are lost to the float rays).
+    assert points["rtlab-float"]["common_error"] < points["textbook-float"]["common_error"]
+    html = (out / "index.html").read_text()
+    (img,) = re.findall(r'<img [^>]*src="pareto.png"[^>]*>', html)
+    assert re.search(r'alt="Share of wrong answers against time per ray[^"]*Pareto front', img)
+    assert (out / "pareto.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "call overhead" in html  # the timing caveat is stated
+
+
+def test_t_error_is_left_out_where_no_ray_is_a_hit_for_both(quick):
+    """Mitsuba misses every ray of a sphere 1e10 radii away (its float rays): no t error row
+    there, both_hits 0, and the plot's alt text says "no data"; rows.json is valid JSON."""
+    out, rows = quick
+    json.loads((out / "rows.json").read_text(), parse_constant=lambda c: pytest.fail(c))
+    assert value(rows, "sphere-distance", 1e10, "mitsuba-scalar_rgb", "both_hits") == 0
+    assert not [r for r in rows if (r["family"], r["knob_value"], r["method"])
+                == ("sphere-distance", 1e10, "mitsuba-scalar_rgb")
+                and r["metric"].startswith("t_error")]  # fmt: skip
+    assert value(rows, "sphere-distance", 1e10, "rtlab", "both_hits") > 0.1
+    assert value(rows, "sphere-distance", 1e10, "rtlab", "t_error_ulps_median") <= 4
+    html = (out / "index.html").read_text()
+    assert re.search(r'alt="sphere-distance:[^"]*mitsuba-scalar_rgb at most [^"(]*\(no data at '
+                     r"1e\+10\)", html)  # fmt: skip
