@@ -141,10 +141,13 @@ def far_camera(knob: float, n: int, rng: np.random.Generator) -> list[Case]:
 
     side = max(int(math.sqrt(n // 40)), 2)  # 5 x 5 pixels quick, 10 x 10 full
     centre = np.array([_f32(x) for x in rng.uniform(-1, 1, 3)])
+    # Every coordinate float32-representable (_f32), as in the other families: centre +- 0.5 may
+    # need a bit more than float has, and a float method would then trace another box (a face
+    # moved by half a float ulp, beyond the bound a face hit claims on its own axis).
     shapes = [
         Sphere(tuple(centre), 0.5),
-        Box(tuple(centre - 0.5), tuple(centre + 0.5)),
-        Triangle(*(tuple(float(x) for x in centre + 0.5 * u) for u in _units(rng, 3))),
+        Box(tuple(_f32(x) for x in centre - 0.5), tuple(_f32(x) for x in centre + 0.5)),
+        Triangle(*(tuple(_f32(x) for x in centre + 0.5 * u) for u in _units(rng, 3))),
     ]
     cases = []
     for shape in shapes:

@@ -472,6 +472,8 @@ def mitsuba_version() -> str:
 
 
 ALL = ("sphere", "plane", "triangle", "box", "mesh")
+#: The shapes study/rtlab_float.py ports (not the cylinder nor the rotated box).
+PORTED = ALL
 ALL = (*ALL, "cylinder", "rbox")  # study/methods_scenes.py
 
 
@@ -484,7 +486,7 @@ def methods(include_mitsuba: bool = True, include_embree: bool = True) -> list[M
                _textbook_spawn(np.float64), _textbook_occluded(np.float64), "double"),
         Method("textbook-float", "1", frozenset(ALL), _textbook(np.float32),
                _textbook_spawn(np.float32), _textbook_occluded(np.float32), "float"),
-        Method("rtlab-float", "1", frozenset(ALL), *rtlab_float.port(np.float32), "float"),
+        Method("rtlab-float", "1", frozenset(PORTED), *rtlab_float.port(np.float32), "float"),
     ]  # fmt: skip
     if include_mitsuba:
         version = mitsuba_version()

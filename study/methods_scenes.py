@@ -110,7 +110,10 @@ def trace_group(method: Method, group: Group, o: Array, d: Array) -> tuple[Trace
     hit = np.isfinite(t)
     p = np.stack([x.p for x in parts])[k, rows]
     n = np.stack([x.n for x in parts])[k, rows]
-    return Traced(hit, t, p, None, n), np.where(hit, k, -1)
+    # The met member's error bound, where the method keeps one (rtlab-float spawns by it).
+    bounds = [x.p_error for x in parts]
+    e = None if any(b is None for b in bounds) else np.stack(bounds)[k, rows]  # type: ignore[arg-type]
+    return Traced(hit, t, p, e, n), np.where(hit, k, -1)
 
 
 def group_method(method: Method) -> Method:
