@@ -28,7 +28,8 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from study.shapes import Mesh, Plane, Shape, Sphere, Triangle, as_mesh
+from study import methods_torus
+from study.shapes import Mesh, Plane, Shape, Sphere, Torus, Triangle, as_mesh
 
 Array = npt.NDArray[np.float64]
 #: The textbook's fixed offset for spawned rays (the 1e-4 of countless course tracers).
@@ -128,6 +129,8 @@ def _textbook(dtype: type) -> Callable[[Shape, Array, Array], Traced]:
     def trace(shape: Shape, o_in: Array, d_in: Array) -> Traced:
         if isinstance(shape, Mesh):
             return _nearest([trace(tr, o_in, d_in) for tr in shape.triangles()])
+        if isinstance(shape, Torus):  # Suffern's quartic, Schwarze's solver: study/methods_torus.py
+            return methods_torus.textbook_trace(dtype)(shape, o_in, d_in)  # type: ignore[operator]
         o, d = o_in.astype(dtype), d_in.astype(dtype)
         with np.errstate(all="ignore"):
             if isinstance(shape, Sphere):
@@ -339,7 +342,7 @@ def mitsuba_version() -> str:
     return str(mi.__version__)
 
 
-ALL = ("sphere", "plane", "triangle", "box", "mesh")
+ALL = ("sphere", "plane", "triangle", "box", "mesh", "torus", "torus-camera")
 
 
 def methods(include_mitsuba: bool = True, include_embree: bool = True) -> list[Method]:
@@ -367,6 +370,11 @@ def methods(include_mitsuba: bool = True, include_embree: bool = True) -> list[M
                     frozenset({"decision"}),
                 )
             )
+    for sturm in (True, False):  # POV-Ray's torus, on its own camera's rays (methods_torus.py)
+        out.append(Method("povray-sturm" if sturm else "povray", methods_torus.povray_version(),
+                          frozenset({"torus-camera"}), methods_torus.povray_trace(sturm),  # type: ignore[arg-type]
+                          _unsupported_spawn, _unsupported_occluded, "double",
+                          frozenset({"decision"})))  # fmt: skip
     if include_embree:
         version = embree_version()
         for robust in (False, True):

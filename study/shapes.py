@@ -100,8 +100,6 @@ def as_mesh(shape: Triangle | Box | Mesh) -> Mesh:
     return Mesh(corners, faces)
 
 
-
-
 @dataclass(frozen=True)
 class PinholeCamera:
     """A pinhole camera given as POV-Ray's perspective camera takes it, every vector explicit

@@ -25,6 +25,7 @@ by a one-ulp move and skip the exact moves."""
 
 from __future__ import annotations
 
+import itertools
 import math
 from fractions import Fraction
 
@@ -135,7 +136,7 @@ def sign_at(p: Poly, x: Fraction) -> int:
 
 def _changes(signs: list[int]) -> int:
     s = [x for x in signs if x != 0]
-    return sum(1 for a, b in zip(s, s[1:], strict=False) if a != b)
+    return sum(1 for a, b in itertools.pairwise(s) if a != b)
 
 
 def _v(seq: list[Poly], x: Fraction) -> int:
@@ -200,10 +201,7 @@ def first_root(tor: Torus, o: npt.ArrayLike, d: npt.ArrayLike,
             hi = mid
         else:
             lo = mid
-    if sign_at(s, hi) == 0:
-        root = _mpf(hi)
-    else:
-        root = _refine(s, lo, hi, digits)
+    root = _mpf(hi) if sign_at(s, hi) == 0 else _refine(s, lo, hi, digits)
     t = root * _mpf(scale)
     if top is not None and not t < tmax:
         return False, None
