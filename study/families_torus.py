@@ -56,7 +56,9 @@ def torus_tube(ratio: float, n: int, rng: np.random.Generator) -> list:
         big_r, r = tor.major_radius, tor.minor_radius
         k = n // 4
         q, nn, m = _meridian(tor, k, rng)
-        far = big_r * 10.0 ** rng.uniform(0.3, 1.5, k)
+        # Origins 2 .. 30 radii and 4 (R + r) beyond: no origin near the torus, where t would be
+        # far below the coordinates and their rounding alone would cost it many of its ulps.
+        far = big_r * 10.0 ** rng.uniform(0.3, 1.5, k) + 4 * (big_r + r)
         # Aimed at the tube point q + r n from the outward side of n.
         u = _units(rng, k)
         u = np.where((np.sum(u * nn, axis=1) < 0)[:, None], -u, u)
@@ -76,15 +78,16 @@ def torus_tube(ratio: float, n: int, rng: np.random.Generator) -> list:
     return cases
 
 
-def pixel_rays(cam: PinholeCamera) -> tuple[Array, Array]:
+def pixel_rays(cam: PinholeCamera, shift: tuple[float, float] = (0.0, 0.0)) -> tuple[Array, Array]:
     """The camera's pixel rays, row by row from the top, in double exactly as POV-Ray 3.7
     computes them without antialiasing (source/backend/render/tracepixel.cpp, v3.7.0.9,
     TracePixel::CreateCameraRay, PERSPECTIVE_CAMERA): the pixel's centre x = i + 0.5,
     y = j - 0.5; x0 = x / W - 0.5, y0 = ((H - 1) - y) / H - 0.5; direction = 1 D + x0 R + y0 U
-    (VLinComb3, left to right); then VNormalize: times 1 / sqrt(x^2 + y^2 + z^2)."""
+    (VLinComb3, left to right); then VNormalize: times 1 / sqrt(x^2 + y^2 + z^2). ``shift``
+    moves every pixel's point by that many pixels in x and in y (tests: 0, POV-Ray's rays)."""
     w, h = cam.width, cam.height
-    i = np.tile(np.arange(w, dtype=np.float64), h)
-    j = np.repeat(np.arange(h, dtype=np.float64), w)
+    i = np.tile(np.arange(w, dtype=np.float64), h) + shift[0]
+    j = np.repeat(np.arange(h, dtype=np.float64), w) + shift[1]
     x0 = (i + 0.5) / w - 0.5
     y0 = ((h - 1) - (j - 0.5)) / h - 0.5
     dv, rv, uv = (np.array(v, dtype=np.float64) for v in (cam.direction, cam.right, cam.up))

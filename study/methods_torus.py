@@ -2,9 +2,9 @@
 
 - The textbook's torus: the ray's quartic as Suffern prints it ("Ray Tracing from the Ground
   Up", 2007, section 19.5, the torus around z here), solved in closed form by Schwarze's
-  SolveQuartic (Jochen Schwarze, "Cubic and Quartic Roots", Graphics Gems I, 1990, pp. 404-407,
-  its EQN_EPS = 1e-9 included: Ferrari's resolvent cubic by Cardano, two quadratics), as
-  teaching tracers copy it; vectorised over the rays, in float64 or float32 throughout.
+  SolveQuartic (Jochen Schwarze, "Cubic and Quartic Roots", Graphics Gems I, 1990, pp. 404-407:
+  Ferrari's resolvent cubic by Cardano, two quadratics), as teaching tracers copy it, Suffern's
+  book among them; vectorised over the rays, in float64 or float32 throughout.
 - POV-Ray, ``torus { R, r sturm }`` and without ``sturm``: it traces nothing but its camera's
   rays, so it applies to cases whose rays are a PinholeCamera's pixel rays (study/shapes.py,
   study/families_torus.py pixel_rays()): a width x height image, no antialiasing, the torus
@@ -28,8 +28,10 @@ from study.shapes import Torus
 
 Array = npt.NDArray[np.float64]
 
-#: Schwarze's EQN_EPS, his IsZero() threshold (as printed, for every precision).
-EQN_EPS = 1e-9
+#: The IsZero() threshold as Suffern's copy of Schwarze's code sets it (his Maths.h): 1e-90,
+#: where Graphics Gems printed 1e-9, an absolute threshold that misjudges every small torus
+#: (its coefficients go as R^4). In float32 it rounds to 0: IsZero() is then never true.
+EQN_EPS = 1e-90
 
 
 def _is_zero(x: np.ndarray) -> np.ndarray:

@@ -184,16 +184,21 @@ def first_root(tor: Torus, o: npt.ArrayLike, d: npt.ArrayLike,
     zero = Fraction(0)
     if _count(seq, zero, top) - (top is not None and sign_at(s, top) == 0) <= 0:
         return False, None
-    # The first root's scale: the smallest power of two 2^k with a root in (0, 2^k].
-    k = 0
-    if _count(seq, zero, Fraction(1)) > 0:
-        while _count(seq, zero, Fraction(1, 2 ** (-k + 1))) > 0:
-            k -= 1
+    guess = _guess(s)
+    bracket = _near(seq, guess) if guess is not None else None
+    if bracket is not None:
+        lo, hi = bracket
     else:
-        while _count(seq, zero, Fraction(2**k)) == 0:
-            k += 1
-    hi = Fraction(2) ** k
-    lo = hi / 2
+        # The first root's scale: the smallest power of two 2^k with a root in (0, 2^k].
+        k = 0
+        if _count(seq, zero, Fraction(1)) > 0:
+            while _count(seq, zero, Fraction(1, 2 ** (-k + 1))) > 0:
+                k -= 1
+        else:
+            while _count(seq, zero, Fraction(2**k)) == 0:
+                k += 1
+        hi = Fraction(2) ** k
+        lo = hi / 2
     # (lo, hi] holds the first root and no root lies in (0, lo]: bisect until it holds one.
     while _count(seq, lo, hi) > 1:
         mid = (lo + hi) / 2
@@ -201,11 +206,34 @@ def first_root(tor: Torus, o: npt.ArrayLike, d: npt.ArrayLike,
             hi = mid
         else:
             lo = mid
-    root = _mpf(hi) if sign_at(s, hi) == 0 else _refine(s, lo, hi, digits)
+    root = _mpf(hi) if sign_at(s, hi) == 0 else _refine(s, lo, hi, digits, guess)
     t = root * _mpf(scale)
     if top is not None and not t < tmax:
         return False, None
     return True, t
+
+
+def _guess(s: Poly) -> float | None:
+    """A double approximation of the first positive root (numpy's companion matrix on the exact
+    coefficients rounded once): only a starting point, every use of it is checked exactly."""
+    lead = Fraction(s[0])
+    with np.errstate(all="ignore"):
+        c = np.array([float(Fraction(x) / lead) for x in s])
+        if not np.all(np.isfinite(c)):
+            return None
+        z = np.roots(c)
+    real = sorted(x.real for x in z if x.real > 0 and abs(x.imag) <= 1e-6 * abs(x))
+    return float(real[0]) if real else None
+
+
+def _near(seq: list[Poly], guess: float) -> tuple[Fraction, Fraction] | None:
+    """(lo, hi] around the guess with no root in (0, lo] and one at least in (lo, hi], if a
+    relative width of 1e-12 .. 1e-3 finds one."""
+    for w in (1e-12, 1e-9, 1e-6, 1e-3):
+        lo, hi = Fraction(guess * (1 - w)), Fraction(guess * (1 + w))
+        if lo > 0 and _count(seq, Fraction(0), lo) == 0 and _count(seq, lo, hi) > 0:
+            return lo, hi
+    return None
 
 
 def _mpf(x: Fraction) -> mpmath.mpf:
@@ -217,11 +245,55 @@ def _as_fraction(x: mpmath.mpf) -> Fraction:
     return Fraction(man) * Fraction(2) ** exp
 
 
-def _refine(s: Poly, lo: Fraction, hi: Fraction, digits: int) -> mpmath.mpf:
-    """The simple root of s in (lo, hi) (s changes sign there), to ``digits`` digits: exact
-    bisection to 50 bits, Newton's method in mpmath, and an exact check of the sign change
-    across the result; bisection all the way where that check fails."""
+def _newton(s: Poly, x0: mpmath.mpf, digits: int) -> mpmath.mpf:
+    """Newton's method from x0 on the fixed-point grid x = m / 2^e, m of about digits + 20
+    digits, in integers: s and s' at x are exact (den^n s(m / den), Horner), the step is
+    rounded to the grid. No floating-point rounding to cancel: the integer coefficients' terms
+    cancel by many digits near a close pair of roots (a grazing ray), mpmath's would not."""
+    bits = int((digits + 20) * 3.33)
+    e = bits - int(mpmath.floor(mpmath.log(abs(x0), 2)))
+    m = int(mpmath.nint(mpmath.ldexp(x0, e)))
+    den = 1 << e
+    n = len(s) - 1
+    ds = [c * (n - i) for i, c in enumerate(s[:-1])]
+    for _ in range(60):
+        v, dpow = s[0], 1
+        for c in s[1:]:
+            dpow *= den
+            v = v * m + c * dpow  # den^n s(m / den)
+        dv, dpow = ds[0], 1
+        for c in ds[1:]:
+            dpow *= den
+            dv = dv * m + c * dpow  # den^(n - 1) s'(m / den)
+        if dv == 0:
+            break
+        step = (2 * v + dv) // (2 * dv) if dv > 0 else -((2 * v - dv) // (-2 * dv))
+        m -= step  # the step in units of 1 / den, rounded: s / s' = (v / dv) / den
+        if abs(step) <= 1:
+            break
+    with mpmath.workdps(digits + 40):
+        return mpmath.ldexp(mpmath.mpf(m), -e)
+
+
+def _bracketed(s: Poly, x: mpmath.mpf, lo: Fraction, hi: Fraction, s_lo: int,
+               digits: int) -> bool:  # fmt: skip
+    """Whether s changes sign, exactly, across x +- |x| 10^-digits within (lo, hi)."""
+    with mpmath.workdps(digits + 20):
+        width = abs(x) * mpmath.mpf(10) ** (-digits)
+        a, b = _as_fraction(x - width), _as_fraction(x + width)
+    return lo <= a and b <= hi and sign_at(s, a) == s_lo and sign_at(s, b) == -s_lo
+
+
+def _refine(s: Poly, lo: Fraction, hi: Fraction, digits: int,
+            guess: float | None = None) -> mpmath.mpf:  # fmt: skip
+    """The simple root of s in (lo, hi) (s changes sign there), to ``digits`` digits: Newton's
+    method in mpmath from the guess, or after exact bisection to 50 bits, then an exact check
+    of the sign change across the result; bisection all the way where that check fails."""
     s_lo = sign_at(s, lo)
+    if guess is not None and lo < Fraction(guess) < hi:
+        x = _newton(s, mpmath.mpf(guess), digits)
+        if _bracketed(s, x, lo, hi, s_lo, digits):
+            return x
     for _ in range(50):
         mid = (lo + hi) / 2
         sm = sign_at(s, mid)
@@ -231,17 +303,8 @@ def _refine(s: Poly, lo: Fraction, hi: Fraction, digits: int) -> mpmath.mpf:
             lo = mid
         else:
             hi = mid
-    with mpmath.workdps(digits + 20):
-        coeffs = [mpmath.mpf(c) for c in s]
-        x = _mpf((lo + hi) / 2)
-        for _ in range(12):
-            v, dv = mpmath.polyval(coeffs, x, derivative=True)
-            if dv == 0:
-                break
-            x -= v / dv
-        width = abs(x) * mpmath.mpf(10) ** (-digits)
-        a, b = _as_fraction(x - width), _as_fraction(x + width)
-    if lo <= a and b <= hi and sign_at(s, a) == s_lo and sign_at(s, b) == -s_lo:
+    x = _newton(s, _mpf((lo + hi) / 2), digits)
+    if _bracketed(s, x, lo, hi, s_lo, digits):
         return x
     while hi - lo > abs(hi) * Fraction(1, 10**digits):  # pragma: no cover (Newton failed)
         mid = (lo + hi) / 2
@@ -379,17 +442,17 @@ def undecidable(tor: Torus, o: npt.ArrayLike, d: npt.ArrayLike, hit: bool,
 def separation(tor: Torus, o: npt.ArrayLike, d: npt.ArrayLike, t: object) -> float:
     """|cos| of the angle between the ray and the tube's normal at the true hit: the sphere's
     half chord over the radius (truth.Truth.separation) for the tube. Near 0 the ray grazes
-    and t is ill-conditioned."""
-    c = [mpmath.mpf(float(x)) for x in tor.center]
-    dd = [mpmath.mpf(float(x)) for x in np.asarray(d)]
-    p = [mpmath.mpf(float(x)) + t * di - ci for x, di, ci in zip(np.asarray(o), dd, c, strict=True)]
-    rho = mpmath.sqrt(p[0] ** 2 + p[1] ** 2)
+    and t is ill-conditioned. A label, not a truth: double precision is enough (rho - R is
+    known to a few ulps of R, the normal's direction to those over r)."""
+    dd = np.asarray(d, dtype=np.float64)
+    p = np.asarray(o, dtype=np.float64) + float(t) * dd - np.array(tor.center)  # type: ignore[arg-type]
+    rho = math.hypot(p[0], p[1])
     if rho == 0:
         return 0.0
-    big_r = mpmath.mpf(tor.major_radius)
-    n = [p[0] * (1 - big_r / rho), p[1] * (1 - big_r / rho), p[2]]
-    nn = mpmath.sqrt(mpmath.fsum(x * x for x in n)) * mpmath.sqrt(mpmath.fsum(x * x for x in dd))
-    return float(abs(mpmath.fsum(a * b for a, b in zip(n, dd, strict=True))) / nn) if nn else 0.0
+    k = 1 - tor.major_radius / rho
+    n = np.array([p[0] * k, p[1] * k, p[2]])
+    nn = float(np.linalg.norm(n) * np.linalg.norm(dd))
+    return abs(float(n @ dd)) / nn if nn > 0 else 0.0
 
 
 def side(tor: Torus, p: npt.ArrayLike) -> int:

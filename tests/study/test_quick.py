@@ -21,7 +21,7 @@ from tracer.cli import main
 __all__ = ["browser"]  # the fixture, shared with tests/reports/test_pages.py
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")  # session: tests/study/test_torus.py reads the same run
 def site(tmp_path_factory):
     """The quick study as the course site makes it (`rtlab report course --study quick`), in
     site/study/, with the precision lesson's page that links to it (no known-wrong versions:
@@ -35,7 +35,7 @@ def site(tmp_path_factory):
     return out
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def quick(site):
     out = site / "study"
     rows = json.loads((out / "rows.json").read_text())
