@@ -21,7 +21,7 @@ from tracer.cli import main
 __all__ = ["browser"]  # the fixture, shared with tests/reports/test_pages.py
 
 
-@pytest.fixture(scope="session")  # session: tests/study/test_torus.py reads the same run
+@pytest.fixture(scope="module")
 def site(tmp_path_factory):
     """The quick study as the course site makes it (`rtlab report course --study quick`), in
     site/study/, with the precision lesson's page that links to it (no known-wrong versions:
@@ -35,7 +35,7 @@ def site(tmp_path_factory):
     return out
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def quick(site):
     out = site / "study"
     rows = json.loads((out / "rows.json").read_text())
@@ -124,7 +124,7 @@ def test_breakdown_and_pages(quick):
     assert by[("sphere-distance", "textbook-double")] == 1e5
     html = (out / "index.html").read_text()
     images = re.findall(r"<img [^>]*>", html)
-    assert len(images) == len(FAMILIES) == 9
+    assert len(images) == len(FAMILIES) == 11  # with torus-tube and torus-distance
     assert all(re.search(r'alt="[^"]{20,}"', i) for i in images)
     for i in images:
         src = re.search(r'src="([^"]+)"', i).group(1)
