@@ -104,7 +104,7 @@ def as_mesh(shape: Triangle | Box | Mesh) -> Mesh:
 class PinholeCamera:
     """A pinhole camera given as POV-Ray's perspective camera takes it, every vector explicit
     (no look_at, no angle: nothing for the renderer to compute): pixel (i, j) of a width x
-    height image looks along direction + x0 right + y0 up (study/povray_torus.py)."""
+    height image looks along direction + x0 right + y0 up (study/families_torus.py pixel_rays())."""
 
     location: Vec
     direction: Vec
