@@ -187,3 +187,27 @@ def test_methods_on_tori_are_listed():
     names = {m.name for m in methods(include_mitsuba=False, include_embree=False)
              if "torus" in m.kinds or "torus-camera" in m.kinds}  # fmt: skip
     assert names == {"rtlab", "textbook-double", "textbook-float", "povray", "povray-sturm"}
+
+
+def test_rtlab_decides_grazing_rays_of_a_tube_1e8_thin():
+    # The regression the fix in tracer/cpp/18_torus.h is for: rays along z in the plane y = 0
+    # at rho = R + r (1 -+ 2^-k) from the axis, R = 1, r = 2^-27 (about 7e-9): they cut or
+    # miss the tube by r 2^-k, 2^-47 at k = 20, far above a one-ulp move of the origin (2^-52:
+    # the truth calls them decidable). The quartic's constant term, A^2 - 4 R^2 x^2 with
+    # A^2 ~ 4, rounds by 2^-50 where its true value is about 4 r^2 2^-k: the old code decided
+    # all of them by rounding; the tube distance's sign decides them.
+    thin = Torus((0.0, 0.0, 0.0), 1.0, 2.0**-27)
+    ks = np.arange(1, 21, dtype=float)
+    x = np.concatenate([1 + 2.0**-27 * (1 - 2.0**-ks), 1 + 2.0**-27 * (1 + 2.0**-ks)])
+    o = np.c_[x, np.zeros_like(x), np.full_like(x, -3.0)]
+    d = np.tile([0.0, 0.0, 1.0], (len(x), 1))
+    tr = truth.truth(thin, o, d)
+    assert tr.hit.tolist() == [True] * 20 + [False] * 20
+    assert not tr.undecidable.any()
+    (rtlab,) = [m for m in methods(include_mitsuba=False, include_embree=False)
+                if m.name == "rtlab"]  # fmt: skip
+    got = rtlab.trace(thin, o, d)
+    assert got.hit.tolist() == tr.hit.tolist()
+    # t: where the ray enters the tube, 3 - sqrt(r^2 - (x - R)^2); a few ulps (the bisection's
+    # last bit, the shift back to the origin: see test_rtlab_decides_every_decidable_torus_ray).
+    assert np.all(np.abs(got.t[:20] - tr.t[:20]) <= 4 * np.spacing(tr.t[:20]))
