@@ -528,6 +528,19 @@ FAMILIES.update({
 })  # fmt: skip
 
 
+# ------------------------------------------------------------------------------- (h) tori
+from study.families_torus import torus_distance, torus_tube  # noqa: E402
+
+FAMILIES.update({
+    f.name: f
+    for f in (
+        Family("torus-tube", "tube ratio r / R", tuple(10.0**-e for e in range(1, 9)),
+               (1e-1, 1e-8), ("torus",), torus_tube, stiffer="down"),
+        Family("torus-distance", "camera distance / R", tuple(10.0**e for e in range(1, 9)),
+               (10.0, 1e8), ("torus",), torus_distance),
+    )
+})  # fmt: skip
+
 # Issue 11's scene families (nearly touching surfaces, mirror chains, grazing cylinders) add
 # themselves to FAMILIES: study/families_scenes.py.
 from study import families_scenes  # noqa: E402, F401

@@ -37,8 +37,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from study import rtlab_float
-from study.shapes import Mesh, Plane, Shape, Sphere, Triangle, as_mesh
+from study import methods_torus, rtlab_float
+from study.shapes import Mesh, Plane, Shape, Sphere, Torus, Triangle, as_mesh
 
 Array = npt.NDArray[np.float64]
 #: The textbook's fixed offset for spawned rays (the 1e-4 of countless course tracers).
@@ -142,6 +142,8 @@ def _textbook(dtype: type) -> Callable[[Shape, Array, Array], Traced]:
             from study.methods_scenes import TEXTBOOK
 
             return TEXTBOOK[shape.kind](shape, o_in, d_in, dtype)
+        if isinstance(shape, Torus):  # Suffern's quartic, Schwarze's solver: study/methods_torus.py
+            return methods_torus.textbook_trace(dtype)(shape, o_in, d_in)  # type: ignore[operator]
         o, d = o_in.astype(dtype), d_in.astype(dtype)
         with np.errstate(all="ignore"):
             if isinstance(shape, Sphere):
@@ -475,6 +477,15 @@ ALL = ("sphere", "plane", "triangle", "box", "mesh")
 #: The shapes study/rtlab_float.py ports (not the cylinder nor the rotated box).
 PORTED = ALL
 ALL = (*ALL, "cylinder", "rbox")  # study/methods_scenes.py
+ALL = (*ALL, "torus", "torus-camera")  # study/methods_torus.py
+
+
+def _unsupported_spawn(tr: Traced, toward: Array) -> Array:
+    raise NotImplementedError("POV-Ray traces only its own camera's rays: nothing is spawned")
+
+
+def _unsupported_occluded(shape: Shape, o: Array, d: Array, tmax: Array) -> np.ndarray:
+    raise NotImplementedError("POV-Ray traces only its own camera's rays: no shadow rays")
 
 
 def methods(include_mitsuba: bool = True, include_embree: bool = True) -> list[Method]:
@@ -502,6 +513,11 @@ def methods(include_mitsuba: bool = True, include_embree: bool = True) -> list[M
                     "float",
                 )
             )
+    for sturm in (True, False):  # POV-Ray's torus, on its own camera's rays (methods_torus.py)
+        out.append(Method("povray-sturm" if sturm else "povray", methods_torus.povray_version(),
+                          frozenset({"torus-camera"}), methods_torus.povray_trace(sturm),  # type: ignore[arg-type]
+                          _unsupported_spawn, _unsupported_occluded, "double",
+                          frozenset({"decision"})))  # fmt: skip
     if include_embree:
         version = embree_version()
         for robust in (False, True):

@@ -100,9 +100,6 @@ def as_mesh(shape: Triangle | Box | Mesh) -> Mesh:
     return Mesh(corners, faces)
 
 
-Shape = Sphere | Plane | Triangle | Box | Mesh
-
-
 # ------------------------------------------------- appended for issue 11's scene families
 # (study/families_scenes.py, study/truth_scenes.py: cylinders, nearly touching surfaces)
 
@@ -173,3 +170,45 @@ class RotatedBox(Box):
 
         return Transform(rotate_axis=self.axis, rotate_degrees=self.degrees,
                          translate=self.translate).matrix[:3]  # fmt: skip
+
+
+@dataclass(frozen=True)
+class PinholeCamera:
+    """A pinhole camera given as POV-Ray's perspective camera takes it, every vector explicit
+    (no look_at, no angle: nothing for the renderer to compute): pixel (i, j) of a width x
+    height image looks along direction + x0 right + y0 up (study/families_torus.py pixel_rays())."""
+
+    location: Vec
+    direction: Vec
+    right: Vec
+    up: Vec
+    width: int
+    height: int
+
+
+@dataclass(frozen=True)
+class Torus:
+    """A ring torus around the axis z through ``center``: the points at distance
+    ``minor_radius`` from the circle of radius ``major_radius`` in the plane z = center.z (the
+    scene language's torus with axis (0, 0, 1): its frame moves by the centre alone, exactly).
+    ``camera``: set where the case's rays are that camera's pixel rays, row by row (POV-Ray
+    traces nothing else); it changes the kind, not the surface."""
+
+    center: Vec
+    major_radius: float
+    minor_radius: float
+    camera: PinholeCamera | None = None
+
+    @property
+    def kind(self) -> str:
+        return "torus" if self.camera is None else "torus-camera"
+
+    def scene_object(self) -> dict[str, Any]:
+        return {"type": "torus", "center": list(self.center), "axis": [0.0, 0.0, 1.0],
+                "major_radius": self.major_radius, "minor_radius": self.minor_radius}  # fmt: skip
+
+    def scaled(self, s: float) -> Torus:
+        return Torus(_scale(self.center, s), self.major_radius * s, self.minor_radius * s)
+
+
+Shape = Sphere | Plane | Triangle | Box | Mesh | Torus

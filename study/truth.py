@@ -21,7 +21,8 @@ import mpmath
 import numpy as np
 import numpy.typing as npt
 
-from study.shapes import Box, Mesh, Plane, Shape, Sphere, Triangle
+from study import truth_torus
+from study.shapes import Box, Mesh, Plane, Shape, Sphere, Torus, Triangle
 
 #: Significant digits of the square roots and of route 2; far beyond the 17 of a double, so
 #: rounding the truth's t to the nearest double is exact whenever route 1 and 2 agree.
@@ -150,6 +151,7 @@ def _mesh1(me: Mesh, o: Vec, d: Vec, tmax: float) -> tuple[bool, object]:
 
 _ROUTE1 = {"sphere": _sphere1, "plane": _plane1, "triangle": _triangle1, "box": _box1,
            "mesh": _mesh1}  # fmt: skip
+_ROUTE1 |= dict.fromkeys(("torus", "torus-camera"), truth_torus.first_root)  # study/truth_torus.py
 
 
 # ------------------------------------------------------------------------------------ route 2
@@ -247,6 +249,7 @@ def _mesh2(me: Mesh, o: list, d: list, tmax: float) -> tuple[bool, object, mpmat
 
 _ROUTE2 = {"sphere": _sphere2, "plane": _plane2, "triangle": _triangle2, "box": _box2,
            "mesh": _mesh2}  # fmt: skip
+_ROUTE2 |= dict.fromkeys(("torus", "torus-camera"), truth_torus.route2)
 
 
 # ------------------------------------------------------------------------------ the interface
@@ -448,7 +451,11 @@ def truth(
                 far = last_exit(shape, o_all[i], d_all[i])
                 chord = (far - _as_mpf(te)) * mpmath.sqrt(_mpf(_dot(_v(d_all[i]), _v(d_all[i]))))
                 separation[i] = float(chord / 2 / shape.radius) if far is not None else 0.0
-        if conditioning and isinstance(shape, Triangle) and tmax == math.inf:
+            elif isinstance(shape, Torus):
+                separation[i] = truth_torus.separation(shape, o_all[i], d_all[i], te)
+        if conditioning and isinstance(shape, Torus):
+            undecidable[i] = truth_torus.undecidable(shape, o_all[i], d_all[i], h, tmax)
+        elif conditioning and isinstance(shape, Triangle) and tmax == math.inf:
             undecidable[i] = _triangle_undecidable(shape, o_all[i], d_all[i], h)
         elif conditioning:
             for signs in (*PERTURBATIONS, *_worst(shape, o_all[i], d_all[i])):
@@ -491,6 +498,8 @@ def side(shape: Shape, p: npt.ArrayLike) -> int:
         return truth_scenes.cylinder_side(shape, p)  # type: ignore[arg-type]
     if shape.kind == "rbox":
         return truth_scenes.rbox_side(shape, p)  # type: ignore[arg-type]
+    if isinstance(shape, Torus):
+        return truth_torus.side(shape, p)
     q = _v(p)
     if isinstance(shape, Sphere):
         f = _sub(q, _v(shape.center))

@@ -124,8 +124,9 @@ def test_breakdown_and_pages(quick):
     assert by[("sphere-distance", "textbook-double")] == 1e5
     html = (out / "index.html").read_text()
     images = re.findall(r"<img [^>]*>", html)
-    # The nine first families and study/families_scenes.py's five; pareto.png is no family's.
-    assert len([i for i in images if "pareto.png" not in i]) == len(FAMILIES) >= 14
+    # The nine first families, study/families_scenes.py's five and the two tori; pareto.png
+    # is no family's.
+    assert len([i for i in images if "pareto.png" not in i]) == len(FAMILIES) == 16
     assert all(re.search(r'alt="[^"]{20,}"', i) for i in images)
     for i in images:
         src = re.search(r'src="([^"]+)"', i).group(1)

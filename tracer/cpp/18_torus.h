@@ -9,8 +9,20 @@
 // quadratic, solved in closed form); on each interval where the function is monotone, a sign
 // change brackets exactly one root, found by bisection to the last bit. Slow next to a formula,
 // but it cannot miss a root that changes sign, nor report one that does not exist.
+//
+// The signs are not taken from the quartic itself. Its constant term A^2 - 4 R^2 (x^2 + y^2)
+// is the difference of two numbers near 4 R^4 whose true difference is about 4 R^2 (r^2 - m^2)
+// (m: how far the ray passes from the tube's circle): below r / R ~ 1e-6 it is all rounding,
+// and the quartic's signs decide nothing (the stiff study measured it: study/, torus-tube).
+// The quartic factors, (x^2 + y^2 + z^2 + R^2 - r^2)^2 - 4 R^2 (x^2 + y^2) =
+//     ((rho - R)^2 + z^2 - r^2) ((rho + R)^2 + z^2 - r^2),   rho = sqrt(x^2 + y^2),
+// and the second factor is positive for r <= R: the quartic has the sign of the tube distance
+// hypot(rho - R, z) - r, which double precision evaluates to a few ulps of R for any r. So the
+// quartic's derivative (its coefficients carry no such cancellation) cuts the chord into pieces
+// where the quartic is monotone, and the tube distance's signs bracket and bisect the roots.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <vector>
@@ -29,21 +41,25 @@ inline double polynomial(const double *c, int n, double x) {
     return v;
 }
 
-// The root of p in [lo, hi] where p(lo) and p(hi) differ in sign, to the last bit. Each step
+// The root of f in [lo, hi] where f(lo) and f(hi) differ in sign, to the last bit. Each step
 // halves the interval, and a double interval of one sign shrinks to adjacent doubles in at most
 // 64 halvings once it is narrower than its magnitude (more while it straddles zero or starts
 // wide): 200 steps is a cap that a working bisection never reaches, there against a loop that
 // would never end.
-inline double bisect(const double *c, int n, double lo, double hi) {
-    double f_lo = polynomial(c, n, lo);
+template <class F> double bisect(F f, double lo, double hi) {
+    double f_lo = f(lo);
     for (int i = 0; i < 200; ++i) {
         double mid = 0.5 * (lo + hi);
         if (mid <= lo || mid >= hi) break; // adjacent doubles: done
-        double f = polynomial(c, n, mid);
-        if ((f < 0) == (f_lo < 0)) lo = mid, f_lo = f;
+        double f_mid = f(mid);
+        if ((f_mid < 0) == (f_lo < 0)) lo = mid, f_lo = f_mid;
         else hi = mid;
     }
     return 0.5 * (lo + hi);
+}
+
+inline double bisect(const double *c, int n, double lo, double hi) {
+    return bisect([c, n](double x) { return polynomial(c, n, x); }, lo, hi);
 }
 
 // The real roots of p (degree n <= 4) in [lo, hi], in increasing order, isolated between the
@@ -91,27 +107,47 @@ struct Torus : Object {
         Vec3 u = ray.d / len;
         double s0 = -dot(ray.o, u);
         Vec3 o = ray.o + s0 * u;
-        double reach = R + r; // the bounding sphere
+        // The bounding sphere, widened relatively by 1e-9 (far above the rounding of o2): the
+        // outer equator touches it, and rays grazing the equator must reach the test below.
+        double reach = (R + r) * (1 + 1e-9);
         double o2 = dot(o, o);
         if (o2 > reach * reach) return false;
         double A = o2 + R * R - r * r;
         double ou = o.x * u.x + o.y * u.y, uu = u.x * u.x + u.y * u.y;
-        double c[5] = {A * A - 4 * R * R * (o.x * o.x + o.y * o.y), -8 * R * R * ou,
-                       2 * A - 4 * R * R * uu, 0, 1};
+        // The quartic's derivative, 4 s^3 + 2 c2 s + c1 (the quartic is c0 + c1 s + c2 s^2 + s^4;
+        // c0, the cancelling one, is not needed).
+        const double dc[4] = {-8 * R * R * ou, 2 * (2 * A - 4 * R * R * uu), 0, 4};
         double half = std::sqrt(reach * reach - o2); // the chord inside the bounding sphere
-        std::vector<double> roots;
-        // The chord, widened a little (relatively by 1e-9, far above its rounding error; and by
-        // 1e-300 so that a zero chord, a ray grazing the bounding sphere, is an interval).
-        real_roots(c, 4, -half * (1 + 1e-9) - 1e-300, half * (1 + 1e-9) + 1e-300, roots);
-        const double abs_c[5] = {std::fabs(c[0]), std::fabs(c[1]), std::fabs(c[2]), 0, 1};
-        const double dc[4] = {c[1], 2 * c[2], 0, 4};
+        // The chord, widened by 1e-300 so that a zero chord, a ray grazing the bounding sphere,
+        // is an interval; its ends lie outside the torus.
+        double lo = -half - 1e-300, hi = half + 1e-300;
+        auto tube = [&](double s) { // the tube distance at o + s u: the quartic's sign
+            Vec3 p = o + s * u;
+            return std::hypot(std::hypot(p.x, p.y) - R, p.z) - r;
+        };
+        std::vector<double> critical, roots;
+        real_roots(dc, 3, lo, hi, critical);
+        std::vector<double> edges{lo};
+        edges.insert(edges.end(), critical.begin(), critical.end());
+        edges.push_back(hi);
+        for (size_t i = 0; i + 1 < edges.size(); ++i) { // the quartic is monotone on each piece
+            double a = edges[i], b = edges[i + 1];
+            double fa = tube(a), fb = tube(b);
+            if (fa == 0) roots.push_back(a);
+            else if ((fa < 0) != (fb < 0) && fb != 0) roots.push_back(bisect(tube, a, b));
+        }
         for (double s : roots) {
             double t = (s0 + s) / len;
             if (!range.surrounds(t)) continue;
-            // A root is known only to within (Horner's rounding bound) / |slope| (Higham 5.1);
-            // one nearer the origin than that may be the surface a new ray starts on.
-            double slope = std::fabs(polynomial(dc, 3, s));
-            double uncertainty = gamma(8) * polynomial(abs_c, 4, std::fabs(s)) / slope;
+            // A root is known only to within the tube distance's rounding (a few ulps of the
+            // point's coordinates, hypot's and the subtractions': gamma(8) of R + |p|) over its
+            // slope along the ray, |N . u| (Higham 5.1); one nearer the origin than that may be
+            // the surface a new ray starts on.
+            Vec3 q = o + s * u;
+            double rho_q = std::hypot(q.x, q.y);
+            Vec3 n_q = rho_q > 0 ? Vec3{q.x - R * q.x / rho_q, q.y - R * q.y / rho_q, q.z} : q;
+            double slope = std::fabs(dot(n_q, u)) / std::max(length(n_q), 1e-300);
+            double uncertainty = gamma(8) * (R + length(q)) / slope;
             if (!(s0 + s > uncertainty)) continue;
             // Refine: move the point onto the tube, along the normal of the tube's circle.
             Vec3 p = o + s * u;
