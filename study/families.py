@@ -528,6 +528,10 @@ FAMILIES.update({
 })  # fmt: skip
 
 
+# Issue 11's scene families (nearly touching surfaces, mirror chains, grazing cylinders) add
+# themselves to FAMILIES: study/families_scenes.py.
+from study import families_scenes  # noqa: E402, F401
+
 # ------------------------------------------------------------------------------- (h) tori
 from study.families_torus import torus_distance, torus_tube  # noqa: E402
 
@@ -540,7 +544,3 @@ FAMILIES.update({
                (10.0, 1e8), ("torus",), torus_distance),
     )
 })  # fmt: skip
-
-# Issue 11's scene families (nearly touching surfaces, mirror chains, grazing cylinders) add
-# themselves to FAMILIES: study/families_scenes.py.
-from study import families_scenes  # noqa: E402, F401

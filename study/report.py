@@ -138,15 +138,17 @@ def _mean(pairs: list[tuple[float, int]]) -> float:
 
 #: The share metrics that say a method answered wrong, one per protocol (run.HEADLINE's).
 WRONG = ("wrong_decisions", "self_hits", "false_occlusions", "scale_mismatches")
+#: Methods measured on their own camera's rays only (study/methods_torus.py).
+OWN_RAYS_ONLY = ("povray", "povray-sturm")
 
 
 def pareto_points(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """Per method: its share of wrong answers (the headline share of each protocol: wrong
     decisions, self-hits, false occlusions, scale mismatches) over the rows (family and knob
     value) it has, and its time per ray on those same rows, both weighted by rays; the same
-    over only the rows every method has ("common": the same rays for all, the fair
-    comparison); and whether the method is on the Pareto front (no other method both faster
-    and less often wrong)."""
+    over only the rows every method that takes any ray has ("common": the same rays for all,
+    the fair comparison; POV-Ray takes only its camera's); and whether the method is on the
+    Pareto front (no other method both faster and less often wrong)."""
     wrong: dict[tuple[str, float, str], list[tuple[float, int]]] = {}
     for r in rows:
         if r["metric"] in WRONG:
@@ -157,7 +159,10 @@ def pareto_points(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
              if r["metric"] == "time_per_ray_s"}  # fmt: skip
     methods = list(dict.fromkeys(m for _, _, m in wrong))
     cells = {(f, k) for f, k, _ in wrong}
-    common = {c for c in cells if all((*c, m) in wrong for m in methods)}
+    # POV-Ray traces only its own camera's pixel rays (the torus-distance family): no cell of
+    # the other families is its, so "every method" of the common panel is every other method.
+    anyray = [m for m in methods if m not in OWN_RAYS_ONLY]
+    common = {c for c in cells if all((*c, m) in wrong for m in anyray)}
     out = []
     for m in methods:
         mine = [c for c in sorted(cells) if (*c, m) in wrong]

@@ -129,6 +129,8 @@ def run_family(
     for value in values:
         index = list(FAMILIES).index(family.name)
         # Seeded by the knob value's place in the full sweep: --quick traces a subset of it.
+        # And by the family's place in FAMILIES: a new family goes at the end, never between,
+        # or every family after it gets other rays (and the tests' measured facts move).
         rng = np.random.default_rng([SEED, index, family.values.index(value)])
         cases = family.generate(value, n, rng)
         acc: dict[str, _Acc] = {}

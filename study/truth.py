@@ -543,6 +543,13 @@ def within_bound(shape: Shape, p: npt.ArrayLike, err: npt.ArrayLike) -> bool:
         near = sum(max(lo[k] - c[k], Fraction(0), c[k] - hi[k]) ** 2 for k in range(3))
         far = sum(max(abs(lo[k] - c[k]), abs(hi[k] - c[k])) ** 2 for k in range(3))
         return near <= r2 <= far
+    if shape.kind == "box":
+        # Convex: the error box holds a surface point iff it meets the solid and is not wholly
+        # inside it. Its corners' sides alone miss an error box wider than the shape (every
+        # corner outside: a float hit from a far camera, +-28 about a unit box).
+        blo, bhi = _v(shape.lo), _v(shape.hi)
+        meets = all(lo[k] <= bhi[k] and blo[k] <= hi[k] for k in range(3))
+        return meets and any(side(shape, x) >= 0 for x in corners)
     sides = {side(shape, x) for x in corners}
     return len(sides) > 1 or 0 in sides
 

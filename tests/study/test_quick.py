@@ -344,3 +344,16 @@ def test_t_error_is_left_out_where_no_ray_is_a_hit_for_both(quick):
     html = (out / "index.html").read_text()
     assert re.search(r'alt="sphere-distance:[^"]*mitsuba-scalar_rgb at most [^"(]*\(no data at '
                      r"1e\+10\)", html)  # fmt: skip
+
+
+def test_within_bound_of_a_box_by_overlap_not_only_corners():
+    """An error box wider than the box it lies on has every corner outside; it still holds
+    surface points (a float hit from 1e8 away: +-28 about a unit box), and one wholly inside or
+    wholly beside the box holds none."""
+    from study.shapes import Box
+
+    unit = Box((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
+    assert truth.within_bound(unit, [1.0, 0.5, 0.0], [1e-9, 0.1, 28.0])
+    assert not truth.within_bound(unit, [1.5, 0.5, 0.5], [0.1, 0.1, 28.0])
+    assert not truth.within_bound(unit, [0.5, 0.5, 0.5], [0.1, 0.1, 0.1])
+    assert truth.within_bound(unit, [1.0, 0.5, 0.5], [0.0, 0.0, 0.0])
