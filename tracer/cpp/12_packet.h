@@ -273,7 +273,7 @@ inline HitL hit_record(const Scene &scene, const RayL &ray, const ClosestL &c, M
         }
         local = local * (radius / len);
         h.p = centre + local;
-        h.p_error = (abs(centre) + abs(local)) * splat(gamma(7));
+        h.p_error = abs(local) * splat(gamma(5)) + (abs(centre) + abs(local)) * splat(gamma(1));
         h.N = local / radius;
     }
     if (planes) { // project back onto the plane
