@@ -16,6 +16,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     p.add_argument("--quick", action="store_true",
                    help="a fixed-seed subset: a few knob values, 1000 rays each")  # fmt: skip
     p.add_argument("--family", help="one family only (default: all)")
+    p.add_argument(
+        "--jobs",
+        type=int,
+        default=None,
+        help="families traced at once, a process each (default: one a core)",
+    )
     f = sub.add_parser("freeze", help="freeze failing rays of a run as regression tests")
     f.add_argument("--from", dest="source", required=True,
                    help="a run's failures.json (from rtlab study stiff)")  # fmt: skip
@@ -46,7 +52,7 @@ def run(args: argparse.Namespace) -> int:
     from study.run import run as run_study
 
     try:
-        summary = run_study(Path(args.out), quick=args.quick, family=args.family)
+        summary = run_study(Path(args.out), quick=args.quick, family=args.family, jobs=args.jobs)
     except StudyError as error:
         print(f"rtlab: error: {error}", file=sys.stderr)
         return 2

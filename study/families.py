@@ -544,3 +544,6 @@ FAMILIES.update({
                (10.0, 1e8), ("torus",), torus_distance),
     )
 })  # fmt: skip
+
+# Self-intersection on cylinders and tori (last: the seeds go by place): study/families_curved.py.
+from study import families_curved  # noqa: E402, F401

@@ -104,8 +104,8 @@ def sphere_t(c: Array, r: np.floating, o: Array, d: Array, tmax: Array) -> Array
 
 def sphere_hit(c: Array, r: np.floating, o: Array, d: Array, t: Array) -> tuple[Array, ...]:
     """05_sphere.h sphere_hit(): the point projected onto the sphere (pbrt-v4 6.8.5), its
-    error gamma(7) (|c| + |local|), the normal local / r."""
-    g7 = gamma(7, o.dtype.type)
+    error gamma(5) |local| + gamma(1) (|c| + |local|), the normal local / r."""
+    g5, g1 = gamma(5, o.dtype.type), gamma(1, o.dtype.type)
     local = (o + t[:, None] * d) - c
     length = np.sqrt(_dot(local, local))
     degenerate = ~(length > 0)  # the point fell on the centre: take the side facing the ray
@@ -113,7 +113,7 @@ def sphere_hit(c: Array, r: np.floating, o: Array, d: Array, t: Array) -> tuple[
     length = np.where(degenerate, np.sqrt(_dot(local, local)), length)
     local = local * (r / length)[:, None]
     p = c + local
-    p_error = g7 * (np.abs(c) + np.abs(local))
+    p_error = g5 * np.abs(local) + g1 * (np.abs(c) + np.abs(local))
     return p, p_error, _div(local, r)
 
 

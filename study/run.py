@@ -5,8 +5,12 @@ failures.json, a plot per family, index.html), each written atomically."""
 from __future__ import annotations
 
 import difflib
+import functools
 import json
+import multiprocessing
+import os
 import time
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -201,25 +205,55 @@ def breakdown(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     return out
 
 
+@functools.lru_cache(maxsize=2)
+def _methods(include_mitsuba: bool) -> list[Method]:
+    return methods(include_mitsuba)
+
+
+def _family_job(name: str, quick: bool, include_mitsuba: bool) -> tuple[list, list, float]:
+    """One family in a worker process: its rows, its failures, its seconds."""
+    t0 = time.perf_counter()
+    rows, fails = run_family(FAMILIES[name], quick, _methods(include_mitsuba))
+    return rows, fails, time.perf_counter() - t0
+
+
 def run(out: Path, quick: bool = False, family: str | None = None,
-        include_mitsuba: bool = True) -> dict[str, Any]:  # fmt: skip
-    """Run the study into ``out``; returns a summary (rows, breakdown, seconds)."""
+        include_mitsuba: bool = True, jobs: int | None = None) -> dict[str, Any]:  # fmt: skip
+    """Run the study into ``out``; returns a summary (rows, breakdown, seconds). ``jobs``:
+    families traced at once, each in its own process (default: one per core); the rows come
+    out in FAMILIES' order whatever the order they finish in, and each family's rays are its
+    own seed's (study/run.py run_family()), so the outputs do not depend on ``jobs``."""
     from tracer.image import atomic_path
 
     families = [family_named(family)] if family else list(FAMILIES.values())
     if out.exists() and not out.is_dir():
         raise StudyError(f"--out: {out} is a file; expected a directory (it is created)")
+    if jobs is not None and jobs < 1:
+        raise StudyError(f"--jobs: {jobs}; expected a number of processes, 1 or more")
     start = time.perf_counter()
-    all_methods = methods(include_mitsuba)
+    jobs = min(jobs or os.cpu_count() or 1, len(families))
     rows: list[dict[str, Any]] = []
     failures: list[dict[str, Any]] = []
     seconds: dict[str, float] = {}
-    for f in families:
-        t0 = time.perf_counter()
-        r, fails = run_family(f, quick, all_methods)
-        rows += r
-        failures += fails
-        seconds[f.name] = time.perf_counter() - t0
+    if jobs == 1:
+        done = (_family_job(f.name, quick, include_mitsuba) for f in families)
+    else:
+        # "spawn": a fresh interpreter per worker (Dr.Jit's and Embree's threads do not survive
+        # a fork). Each worker sets its methods up once (Mitsuba's import, its variants).
+        pool = ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn"))
+        # The costliest first, so that the last to finish is a short one.
+        order = sorted(families, key=lambda f: -len(f.quick_values if quick else f.values))
+        futures = {f.name: pool.submit(_family_job, f.name, quick, include_mitsuba)
+                   for f in order}  # fmt: skip
+        done = (futures[f.name].result() for f in families)
+    try:
+        for f, (r, fails, secs) in zip(families, done, strict=True):
+            rows += r
+            failures += fails
+            seconds[f.name] = secs
+    finally:
+        if jobs > 1:
+            pool.shutdown(cancel_futures=True)
     brk = breakdown(rows)
     out.mkdir(parents=True, exist_ok=True)
     for name, data in (("rows.json", rows), ("breakdown.json", brk),

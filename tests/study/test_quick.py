@@ -124,9 +124,9 @@ def test_breakdown_and_pages(quick):
     assert by[("sphere-distance", "textbook-double")] == 1e5
     html = (out / "index.html").read_text()
     images = re.findall(r"<img [^>]*>", html)
-    # The nine first families, study/families_scenes.py's five and the two tori; pareto.png
-    # is no family's.
-    assert len([i for i in images if "pareto.png" not in i]) == len(FAMILIES) == 16
+    # The nine first families, study/families_scenes.py's five, the two tori and
+    # study/families_curved.py's one; pareto.png is no family's.
+    assert len([i for i in images if "pareto.png" not in i]) == len(FAMILIES) == 17
     assert all(re.search(r'alt="[^"]{20,}"', i) for i in images)
     for i in images:
         src = re.search(r'src="([^"]+)"', i).group(1)
@@ -357,3 +357,40 @@ def test_within_bound_of_a_box_by_overlap_not_only_corners():
     assert not truth.within_bound(unit, [1.5, 0.5, 0.5], [0.1, 0.1, 28.0])
     assert not truth.within_bound(unit, [0.5, 0.5, 0.5], [0.1, 0.1, 0.1])
     assert truth.within_bound(unit, [1.0, 0.5, 0.5], [0.0, 0.0, 0.0])
+
+
+def test_families_traced_in_worker_processes_give_the_rows_of_one_process(quick):
+    """The quick run traced its families in worker processes (one per core, study/run.py run());
+    two of them traced again here, in this process, give the very same rows (times apart)."""
+    from study import run
+    from study.methods import methods
+
+    _, rows = quick
+    here = methods(include_mitsuba=True)
+    for name in ("boxes", "rotated-boxes"):
+        again = run.run_family(FAMILIES[name], True, here)[0]
+        mine = [r for r in rows if r["family"] == name]
+        assert len(again) == len(mine) > 0
+        for a, b in zip(again, mine, strict=True):
+            if a["metric"] != "time_per_ray_s":
+                assert a == b, (a, b)
+
+
+def test_jobs_must_be_positive(tmp_path):
+    from study.run import StudyError, run
+
+    with pytest.raises(StudyError, match="--jobs: 0; expected a number of processes"):
+        run(tmp_path / "s", quick=True, family="boxes", jobs=0)
+
+
+def test_no_self_hit_on_cylinders_and_tori_at_any_scale(quick):
+    """pbrt-v4's re-intersection protocol on capped cylinders and tori (study/families_curved.py),
+    each spawned ray judged by the exact first hit from its own origin. rtlab: none at 1e-8 and
+    1e8; the textbook's fixed 1e-4 in float is below float's ulp at 1e8 (8): it self-hits."""
+    _, rows = quick
+    for knob in (1e-8, 1e8):
+        for metric in ("self_hits", "missed_far", "wrong_side", "primary_misses", "nan_inf"):
+            assert value(rows, "self-intersection-curved", knob, "rtlab", metric) == 0, metric
+    assert value(rows, "self-intersection-curved", 1e8, "textbook-float", "self_hits") > 0.1
+    # And at 1e-8 the fixed offset jumps through shapes of size 1e-10 .. 1e-8: wrong sides.
+    assert value(rows, "self-intersection-curved", 1e-8, "textbook-double", "wrong_side") > 0.1
