@@ -66,6 +66,9 @@ class Method:
     #: The case protocols (study/families.py) it is measured on: first hits only where spawn and
     #: occluded are not written for it.
     protocols: frozenset[str] = frozenset({"decision", "spawn", "shadow", "scale"})
+    #: Whether its hits carry a t: POV-Ray's image tells hit from miss only (its t is a
+    #: placeholder, and the t metrics are left out of its rows).
+    reports_t: bool = True
 
 
 # ------------------------------------------------------------------------------------ rtlab
@@ -517,7 +520,7 @@ def methods(include_mitsuba: bool = True, include_embree: bool = True) -> list[M
         out.append(Method("povray-sturm" if sturm else "povray", methods_torus.povray_version(),
                           frozenset({"torus-camera"}), methods_torus.povray_trace(sturm),  # type: ignore[arg-type]
                           _unsupported_spawn, _unsupported_occluded, "double",
-                          frozenset({"decision"})))  # fmt: skip
+                          frozenset({"decision"}), reports_t=False))  # fmt: skip
     if include_embree:
         version = embree_version()
         for robust in (False, True):

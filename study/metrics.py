@@ -67,7 +67,8 @@ def decision(case: Case, method: Method, tru: oracle.Truth) -> Result:
     tr, seconds = timed(method.trace, case.shape, case.origins, case.directions)
     decidable = ~tru.undecidable
     wrong = (tr.hit != tru.hit) & decidable
-    both = tr.hit & tru.hit & decidable
+    # The rays both call a hit, for the t metrics (none where the method reports no t).
+    both = tr.hit & tru.hit & decidable & method.reports_t
     err = ulps(tr.t, tru.t)
     err = np.where(both, err, np.nan)
     sep = both & (tru.separation >= 0.5)

@@ -108,6 +108,13 @@ def test_povray_with_and_without_sturm_named_with_its_version(quick):
     assert povray_version().startswith("POV-Ray 3.7")
     # Only on the camera's own rays: every POV-Ray row is a torus-distance row.
     assert {r["family"] for r in rows if r["method"].startswith("povray")} == {"torus-distance"}
+    # Its image tells hit from miss only: no t error rows (its t is a placeholder), and
+    # both_hits 0 says why, while rtlab's t rows are there on the same rays.
+    mine = [r for r in rows if r["method"].startswith("povray")]
+    assert not [r for r in mine if r["metric"].startswith("t_error")]
+    assert {r["value"] for r in mine if r["metric"] == "both_hits"} == {0.0}
+    assert any(r["method"] == "rtlab" and r["family"] == "torus-distance"
+               and r["metric"] == "t_error_ulps_max" for r in rows)  # fmt: skip
 
 
 def _camera() -> tuple[Torus, PinholeCamera]:
