@@ -113,13 +113,18 @@ def group_truth(case: Case, check_every: int = 4) -> GroupTruth:
                        check_every=check_every)  # type: ignore[arg-type]  # fmt: skip
     member = np.full(len(case.origins), -1)
     undecidable = np.zeros(len(case.origins), dtype=bool)
+    spread = np.zeros(len(case.origins))  # truth.Truth.t_spread, measured here
     for i, (o, d) in enumerate(zip(case.origins, case.directions, strict=True)):
         h, _, j = first_member(group, o, d)
         member[i] = j
+        for signs in oracle.PERTURBATIONS if h else ():
+            h2, t2 = oracle.first_hit(group, *oracle.perturbed(o, d, signs))
+            if h2:
+                spread[i] = max(spread[i], oracle._spread(tru.t[i], t2))
         ts = member_ts(group, o, d)
         close = len(ts) > 1 and ts[1] - ts[0] < ORDER_ULPS * float(np.spacing(float(ts[0])))
         undecidable[i] = close or group_undecidable(group, o, d, (h, j))
-    return GroupTruth(dataclasses.replace(tru, undecidable=undecidable), member)
+    return GroupTruth(dataclasses.replace(tru, undecidable=undecidable, t_spread=spread), member)
 
 
 def touching(case: Case, method: Method) -> metrics.Result:

@@ -9,6 +9,8 @@ rays the method traced:
   the mean of its cases' medians weighted by their rays;
 - ``both_hits``: share of the rays that the method and the truth both call a (decidable) hit:
   what the t metrics are over;
+- ``t_error_conditioned_max``: the largest |t - t_true| over how many ulps a one-ulp move of
+  the ray moves t_true (at least 1): t's error in units of its own conditioning;
 - ``bound_violations``: share of hit points whose own error box holds no point of the true
   surface (methods that report a bound: rtlab);
 - ``self_hits``: share of spawned rays that meet the surface they leave (an outward ray at all;
@@ -89,6 +91,13 @@ def decision(case: Case, method: Method, tru: oracle.Truth) -> Result:
     if sep.any():
         # Where the roots are well apart (half chord >= r / 2): t is well conditioned there.
         m["t_error_ulps_max_separated"] = float(np.nanmax(np.where(sep, err, np.nan)))
+    if both.any() and tru.t_spread is not None:
+        # t's error in units of its own conditioning (how far a one-ulp move of the ray moves
+        # the exact t, at least one ulp): a few for a method exact for inputs within an ulp or
+        # two, on any ray (for planar shapes, the only root there is may still be ill
+        # conditioned: a ray nearly in the plane).
+        rel = err / np.maximum(tru.t_spread, 1.0)
+        m["t_error_conditioned_max"] = float(np.nanmax(np.where(both, rel, np.nan)))
     fails = {"wrong_decisions": np.flatnonzero(wrong)}
     if case.shape.kind == "mesh":
         # A closed mesh: a decidable true hit reported as a miss went through a crack.

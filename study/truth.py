@@ -35,6 +35,8 @@ AGREE = mpmath.mpf("1e-60")
 #: The one-ulp moves of (ox, oy, oz, dx, dy, dz) tried for a ray's conditioning: all up, all
 #: down, and the two alternations (a few deterministic ones, the same for every method).
 PERTURBATIONS = ((1,) * 6, (-1,) * 6, (1, -1) * 3, (-1, 1) * 3)
+#: The same four patterns on a vertex's three coordinates.
+PERTURBATIONS_3 = tuple(p[:3] for p in PERTURBATIONS)
 
 Vec = tuple[Fraction, Fraction, Fraction]
 
@@ -267,6 +269,17 @@ class Truth:
     #: Sphere hits: the half chord over the radius (1 for other shapes, 0 on a miss): t is
     #: well conditioned only where the two roots are well apart (say above 0.5).
     separation: npt.NDArray[np.float64]
+    #: Hits: how many ulps the exact t moves under the one-ulp moves of the ray's inputs
+    #: (PERTURBATIONS and the worst ones): t's own conditioning. A method exact for inputs
+    #: within an ulp or two may be off by that much, however good it is (a ray 1e-12 rad from a
+    #: triangle's plane: 1e12 ulps). None where not measured (tori: their Sturm truth is costly).
+    t_spread: npt.NDArray[np.float64] | None = None
+
+
+def _spread(t: float, t_moved: object) -> float:
+    """|t' - t| in ulps of t, for the exact t' of a moved ray."""
+    moved = float(_as_mpf(t_moved))
+    return abs(moved - t) / math.ulp(t) if t != 0 else 0.0
 
 
 def first_hit(shape: Shape, o: npt.ArrayLike, d: npt.ArrayLike, tmax: float = math.inf) -> tuple:
@@ -351,6 +364,8 @@ def _triangle_hits(verts: list[tuple[float, ...]], o: np.ndarray, d: np.ndarray)
 #: Every sign pattern of a one-ulp move of six (ray) or three (vertex) components.
 _RAY_MOVES = [tuple(1 if (m >> k) & 1 else -1 for k in range(6)) for m in range(64)]
 _VERTEX_MOVES = [tuple(1 if (m >> k) & 1 else -1 for k in range(3)) for m in range(8)]
+#: The vertex moves t's conditioning is measured with (truth() t_spread): four of the eight.
+_SPREAD_VERTEX_MOVES = [(k, s) for k in range(3) for s in PERTURBATIONS_3]
 
 
 def _ulp_norm(v: npt.ArrayLike) -> mpmath.mpf:
@@ -439,6 +454,7 @@ def truth(
     exact: list = [None] * n
     undecidable = np.zeros(n, dtype=bool)
     separation = np.zeros(n)
+    spread = np.zeros(n)
     for i in range(n):
         h, te = first_hit(shape, o_all[i], d_all[i], tmax)
         if i % check_every == 0:
@@ -457,13 +473,37 @@ def truth(
             undecidable[i] = truth_torus.undecidable(shape, o_all[i], d_all[i], h, tmax)
         elif conditioning and isinstance(shape, Triangle) and tmax == math.inf:
             undecidable[i] = _triangle_undecidable(shape, o_all[i], d_all[i], h)
+            for signs in PERTURBATIONS if h and not undecidable[i] else ():
+                h2, t2 = first_hit(shape, *perturbed(o_all[i], d_all[i], signs), tmax)
+                if h2:
+                    spread[i] = max(spread[i], _spread(t[i], t2))
+            # And moves of each vertex alone by one ulp of its place relative to the ray's
+            # origin: every triangle test starts from v - o (Moeller-Trumbore's s = o - v0, the
+            # watertight test's translation, pbrt-v4 6.8.3), whose rounding is such a move; a
+            # sliver's plane, and so t, turns with it far more than with any move of the ray.
+            # (A few of the sign patterns: a lower bound on t's conditioning, so that a method
+            # is, if anything, judged too hard.)
+            for k, signs in _SPREAD_VERTEX_MOVES if h and not undecidable[i] else ():
+                verts = [shape.a, shape.b, shape.c]
+                step = np.spacing(np.abs(np.asarray(verts[k], dtype=np.float64) - o_all[i]))
+                moved = zip(verts[k], signs, step, strict=True)
+                verts[k] = tuple(float(x + sg * st) for x, sg, st in moved)
+                h2, t2 = first_hit(Triangle(*verts), o_all[i], d_all[i], tmax)
+                if h2:
+                    spread[i] = max(spread[i], _spread(t[i], t2))
         elif conditioning:
             for signs in (*PERTURBATIONS, *_worst(shape, o_all[i], d_all[i])):
                 po, pd = perturbed(o_all[i], d_all[i], signs)
-                if first_hit(shape, po, pd, tmax)[0] != h:
+                h2, t2 = first_hit(shape, po, pd, tmax)
+                if h2 != h:
                     undecidable[i] = True
                     break
-    return Truth(hit, t, exact, undecidable, separation)
+                if h:
+                    spread[i] = max(spread[i], _spread(t[i], t2))
+    # Not measured for tori (their Sturm truth is costly: t_error_ulps_max_separated judges
+    # them, on rays whose roots are apart), nor without conditioning.
+    measured = conditioning and not isinstance(shape, Torus)
+    return Truth(hit, t, exact, undecidable, separation, spread if measured else None)
 
 
 def last_exit(shape: Shape, o: npt.ArrayLike, d: npt.ArrayLike) -> mpmath.mpf | None:
