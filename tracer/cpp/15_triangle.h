@@ -82,6 +82,20 @@ inline bool starts_off_the_plane_heading_in(const Vec3 &p0, const Vec3 &p1, cons
     return std::fabs(h) > h_error && std::fabs(dn) > dn_error && (h > 0) != (dn > 0);
 }
 
+// a b - c d to within 1.5 ulps of the exact value, however close a b is to c d (Kahan's
+// algorithm; Jeannerod, Louvet and Muller 2013 prove the bound; pbrt-v4's DifferenceOfProducts).
+// The product c d is rounded, its rounding error recovered exactly by a fused multiply-add and
+// added back. Plain a b - c d loses every digit the two products share: a sliver of aspect 1e-8
+// has edge functions 1e-8 of its products, so t = t_scaled / det came out 1e8 ulps off while
+// one ulp of the inputs moves the true t by a few (the stiff study's slivers family). The signs
+// stay exact (zero when a b = c d exactly), which keeps the test watertight. Given to the
+// student, not part of the exercise.
+inline double difference_of_products(double a, double b, double c, double d) {
+    double cd = c * d;
+    double error = std::fma(-c, d, cd); // cd - c d, exactly
+    return std::fma(a, b, -cd) + error;
+}
+
 // Watertight ray/triangle test (Woop et al. 2013, with pbrt-v4's conservative bound on t, 6.8.3).
 // Two-sided: the edge functions all >= 0 or all <= 0 is a hit (the sign says which side the
 // ray comes from; both sides are the surface).
@@ -92,7 +106,8 @@ inline bool intersect_triangle(const Vec3 &p0, const Vec3 &p1, const Vec3 &p2,
     // PROMPT: Benthin and Wald 2013): translate the vertices to the ray's origin r.o, permute and
     // PROMPT: shear them (r.kx, r.ky, r.kz, r.Sx, r.Sy, r.Sz) so that the ray runs along +z from
     // PROMPT: (0, 0, 0); the three edge functions at (0, 0) are twice the signed areas of the
-    // PROMPT: sub-triangles. Inside (edge functions all >= 0 or all <= 0: both sides of the
+    // PROMPT: sub-triangles (each a b - c d: difference_of_products(), given, keeps a sliver's
+    // PROMPT: exact). Inside (edge functions all >= 0 or all <= 0: both sides of the
     // PROMPT: triangle) and t in (range.min, range.max]: fill th with t and the barycentric
     // PROMPT: coordinates (b0 + b1 + b2 = 1, p = b0 p0 + b1 p1 + b2 p2) and return true. Reject
     // PROMPT: a hit with t <= range.min + triangle_t_error(...) (the surface the ray starts on)
@@ -104,9 +119,9 @@ inline bool intersect_triangle(const Vec3 &p0, const Vec3 &p1, const Vec3 &p2,
     double cx = c[r.kx] + r.Sx * c[r.kz], cy = c[r.ky] + r.Sy * c[r.kz];
     // Edge functions: twice the signed areas of the sheared triangle's sub-triangles at the
     // ray's point (0, 0).
-    double e0 = bx * cy - by * cx;
-    double e1 = cx * ay - cy * ax;
-    double e2 = ax * by - ay * bx;
+    double e0 = difference_of_products(bx, cy, by, cx);
+    double e1 = difference_of_products(cx, ay, cy, ax);
+    double e2 = difference_of_products(ax, by, ay, bx);
     if ((e0 < 0 || e1 < 0 || e2 < 0) && (e0 > 0 || e1 > 0 || e2 > 0)) return false;
     double det = e0 + e1 + e2;
     if (det == 0) return false; // the ray runs in the triangle's plane
