@@ -119,15 +119,16 @@ def spawn(case: Case, method: Method) -> Result:
     o2 = method.spawn(tr, case.leave)
     o2 = np.where(hit[:, None], o2, case.origins)  # rays that missed are not spawned
     tr2 = method.trace(case.shape, o2, case.leave)
-    closed = isinstance(case.shape, Sphere | Box)
-    if case.shape.kind in TRUTH_JUDGED:
-        return _spawn_by_truth(case, method, tr, o2, tr2, seconds)
-    far = np.array([
-        float(t) if (t := oracle.last_exit(case.shape, a, b)) is not None else math.inf
-        for a, b in zip(o2, case.leave, strict=True)
-    ]) if closed else np.full(len(o2), math.inf)  # fmt: skip
+    by_truth = case.shape.kind in TRUTH_JUDGED
+    closed = by_truth or isinstance(case.shape, Sphere | Box)
     outward, inward = hit & case.outward, hit & ~case.outward
-    if closed:
+    if by_truth:
+        self_hit, missed = _judged_by_truth(case, hit, o2, tr2)
+    elif closed:
+        far = np.array([
+            float(t) if (t := oracle.last_exit(case.shape, a, b)) is not None else math.inf
+            for a, b in zip(o2, case.leave, strict=True)
+        ])  # fmt: skip
         self_hit = (outward & tr2.hit) | (inward & tr2.hit & (tr2.t < 0.5 * far))
         missed = inward & ~tr2.hit
     else:
@@ -156,40 +157,24 @@ def spawn(case: Case, method: Method) -> Result:
 TRUTH_JUDGED = ("cylinder", "torus")
 
 
-def _spawn_by_truth(case: Case, method: Method, tr: Traced, o2: np.ndarray, tr2: Traced,
-                    seconds: float) -> Result:  # fmt: skip
-    """spawn() where the truth says what the spawned ray meets: a self-hit is a hit where the
-    exact ray from the spawned origin meets nothing, or nearer than half its exact first hit
-    (the surface it leaves, met again at once); a missed far side, a miss where the exact ray
-    meets the shape. A spawned origin on the wrong side is counted as such (wrong_side), and
-    its ray then judged from where it starts."""
+def _judged_by_truth(case: Case, hit: np.ndarray, o2: np.ndarray,
+                     tr2: Traced) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """spawn()'s self-hits and missed far sides where the truth says what the spawned ray
+    meets: a self-hit is a hit where the exact ray from the spawned origin meets nothing, or
+    nearer than half its exact first hit (the surface it leaves, met again at once); a missed
+    far side, an inward ray's miss where the exact ray meets the shape. A spawned origin on the
+    wrong side is judged from where it starts (and counted in wrong_side); one that is not
+    finite is judged by wrong_side alone."""
     assert case.outward is not None and case.leave is not None
-    hit = tr.hit & np.all(np.isfinite(tr.p), axis=1)
     self_hit = np.zeros(len(hit), dtype=bool)
     missed = np.zeros(len(hit), dtype=bool)
-    wrong_side = np.zeros(len(hit), dtype=bool)
-    want = np.where(case.outward, 1, -1)
-    for i in np.flatnonzero(hit):
-        if not np.all(np.isfinite(o2[i])):
-            wrong_side[i] = True
-            continue
-        wrong_side[i] = oracle.side(case.shape, o2[i]) != want[i]
+    for i in np.flatnonzero(hit & np.all(np.isfinite(o2), axis=1)):
         ok, t = oracle.first_hit(case.shape, o2[i], case.leave[i])
         if tr2.hit[i]:
             self_hit[i] = not ok or tr2.t[i] < 0.5 * float(t)
         else:
             missed[i] = bool(ok) and not case.outward[i]
-    inward = hit & ~case.outward
-    m = {
-        "self_hits": _share(self_hit, hit),
-        "missed_far": _share(missed, inward),
-        "wrong_side": _share(wrong_side, hit),
-        "primary_misses": _share(~hit, np.ones(len(hit), dtype=bool)),
-        "nan_inf": _nan_inf(tr),
-        "time_per_ray_s": seconds / len(case.origins),
-    }
-    fails = {"self_hits": np.flatnonzero(self_hit), "missed_far": np.flatnonzero(missed)}
-    return m, 0, fails
+    return self_hit, missed
 
 
 def shadow(case: Case, method: Method) -> Result:
