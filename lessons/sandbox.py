@@ -216,6 +216,17 @@ class SubmissionError(ValueError):
     """A submission that cannot be laid over the core (no C++ files of the core's names)."""
 
 
+def _compiled(command: list[str], work: Path, limits: Limits) -> Outcome:
+    """A compiler run under limits; a failure is a compile error, told by its first errors."""
+    outcome = run_limited(command, work, limits, "the build")
+    if outcome.kind == "failed":
+        outcome.kind = "compile_error"
+        outcome.message = "the build failed; the compiler's first errors:\n" + first_errors(
+            outcome.output
+        )
+    return outcome
+
+
 def overlay(submission: Path, work: Path, core: Path = CORE) -> list[str]:
     """Copy the reference core to `work` and the submission's files of the core's names over
     it; returns the names taken from the submission. Other files are ignored."""
@@ -332,12 +343,7 @@ def build_probe(
     command = ["c++", *BUILD_FLAGS, optimisation, "-pthread", "-Icpp", "main.cpp", "-o", "probe"]
 
     def build() -> Build:
-        outcome = run_limited(command, work, limits, "the build")
-        if outcome.kind == "failed":
-            outcome.kind = "compile_error"
-            outcome.message = "the build failed; the compiler's first errors:\n" + first_errors(
-                outcome.output
-            )
+        outcome = _compiled(command, work, limits)
         return Build(outcome, binary if outcome.ok else None, files)
 
     if build_cache() is None:
@@ -429,12 +435,7 @@ def build_extension(
     link = ["c++", "-shared", "-pthread", "bindings.o", str(nb), "-o", str(library)]
 
     def build() -> Build:
-        outcome = run_limited(compile_, work, limits, "the build")
-        if outcome.kind == "failed":
-            outcome.kind = "compile_error"
-            outcome.message = "the build failed; the compiler's first errors:\n" + first_errors(
-                outcome.output
-            )
+        outcome = _compiled(compile_, work, limits)
         if not outcome.ok:
             return Build(outcome, None, files)
         outcome = run_limited(link, work, limits, "the link")
