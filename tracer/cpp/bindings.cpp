@@ -395,11 +395,16 @@ NB_MODULE(_core, m) {
     // t in (0, infinity), as every ray of the renderer does; a closest hit beyond tmax is
     // therefore exactly "no hit in (0, tmax)".
     using Rays = nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig>;
+    // Row i of the origins and directions as a ray (the one conversion both batch calls make).
+    auto ray_at = [](const Rays &origins, const Rays &directions, size_t i) {
+        return rt::Ray{{origins(i, 0), origins(i, 1), origins(i, 2)},
+                       {directions(i, 0), directions(i, 1), directions(i, 2)}};
+    };
     using Column = nb::ndarray<nb::numpy, double, nb::shape<-1>>;
     using Columns = nb::ndarray<nb::numpy, double, nb::shape<-1, 3>>;
     m.def(
         "intersect",
-        [](const rt::Scene &s, Rays origins, Rays directions, double tmax) {
+        [ray_at](const rt::Scene &s, Rays origins, Rays directions, double tmax) {
             const size_t n = origins.shape(0);
             if (directions.shape(0) != n)
                 throw std::invalid_argument("one direction per origin expected");
@@ -412,8 +417,7 @@ NB_MODULE(_core, m) {
                 nb::gil_scoped_release release;
                 rt::RayCounts counts;
                 for (size_t i = 0; i < n; ++i) {
-                    rt::Ray ray{{origins(i, 0), origins(i, 1), origins(i, 2)},
-                                {directions(i, 0), directions(i, 1), directions(i, 2)}};
+                    rt::Ray ray = ray_at(origins, directions, i);
                     rt::Hit hit = rt::closest_hit(s, ray, counts);
                     bool found = hit.found() && hit.t < tmax;
                     double *row = out + i * 12;
@@ -439,8 +443,8 @@ NB_MODULE(_core, m) {
         "miss.");
     m.def(
         "occluded",
-        [](const rt::Scene &s, Rays origins, Rays directions,
-           nb::ndarray<const double, nb::shape<-1>, nb::c_contig> tmax) {
+        [ray_at](const rt::Scene &s, Rays origins, Rays directions,
+                 nb::ndarray<const double, nb::shape<-1>, nb::c_contig> tmax) {
             const size_t n = origins.shape(0);
             if (directions.shape(0) != n || tmax.shape(0) != n)
                 throw std::invalid_argument("one direction and one tmax per origin expected");
@@ -450,8 +454,7 @@ NB_MODULE(_core, m) {
                 nb::gil_scoped_release release;
                 rt::RayCounts counts;
                 for (size_t i = 0; i < n; ++i) {
-                    rt::Ray ray{{origins(i, 0), origins(i, 1), origins(i, 2)},
-                                {directions(i, 0), directions(i, 1), directions(i, 2)}};
+                    rt::Ray ray = ray_at(origins, directions, i);
                     // The range a shadow ray asks about (shadow_ray_to(), 04_hit.h): (0, tmax).
                     out[i] = rt::any_hit(s, ray, {0, tmax(i)}, counts) ? 1 : 0;
                 }
