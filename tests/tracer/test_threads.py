@@ -11,6 +11,8 @@ SCENE = SCENES / "ex25.toml"  # the course's Ex 25, as the demo renders it
 
 
 def test_thread_count_does_not_change_the_image():
+    # 97 x 61 is 28 tiles of 16 x 16: enough for one thread, too few for two or more, which
+    # get tiles of 8 x 8 (11_render.h tile_side()), so the tile size changes here too.
     scene = tracer.load_scene(SCENE).with_overrides(width=97, height=61, spp=5, seed=7)
     images = [tracer.render(scene, threads=t) for t in (1, 2, 3, 8)]
     for image in images[1:]:

@@ -83,6 +83,11 @@ inline ShadowRay shadow_ray_towards(const Hit &hit, const Vec3 &Ng, const Vec3 &
 struct RayCounts {
     uint64_t primary = 0, secondary = 0, shadow = 0;
     uint64_t box_tests = 0, primitive_tests = 0;
+    RayCounts &operator+=(const RayCounts &c) {
+        primary += c.primary, secondary += c.secondary, shadow += c.shadow;
+        box_tests += c.box_tests, primitive_tests += c.primitive_tests;
+        return *this;
+    }
 };
 
 // Slides "Object Class" and "Virtual Methods": every kind of object answers the same question
