@@ -24,15 +24,42 @@ from tracer.scene import load_scene
 from tracer.scenes import demo_scene_path
 
 
-def machine() -> str:
-    model = platform.processor() or platform.machine()
+def _cpuinfo() -> dict[str, str]:
+    """The first processor's fields of /proc/cpuinfo ({} where there is none)."""
+    fields: dict[str, str] = {}
     try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                model = line.split(":", 1)[1].strip()
-                break
+        text = Path("/proc/cpuinfo").read_text()
     except OSError:
-        pass
+        return fields
+    for line in text.splitlines():
+        if not line.strip():
+            break  # the end of the first processor's block
+        key, _, value = line.partition(":")
+        fields.setdefault(key.strip(), value.strip())
+    return fields
+
+
+# The flags that say which vector units the kernels can use (the core is built with
+# -march=native): SSE, AVX, AVX2, AVX-512, FMA and their kin. The whole flag list, a hundred
+# words, says no more about these benchmarks.
+_VECTOR_FLAG = ("sse", "ssse", "avx", "fma", "f16c", "amx")
+
+
+def cpu() -> dict[str, Any]:
+    """The CPU the figures were measured on: its model, its vector-unit flags, its cores."""
+    info = _cpuinfo()
+    flags = sorted(f for f in info.get("flags", "").split() if f.startswith(_VECTOR_FLAG))
+    model = info.get("model name") or platform.processor() or platform.machine()
+    # A virtual machine may name only the brand ("AMD EPYC"); the vendor's family and model
+    # numbers still tell the generation (AMD family 25 is Zen 3 and 4, 26 is Zen 5).
+    numbers = [f"{k} {info[k]}" for k in ("cpu family", "model", "stepping") if k in info]
+    if numbers:
+        model += f" ({info.get('vendor_id', '')} {', '.join(numbers)})".replace("( ", "(")
+    return {"cpu_model": model, "cpu_flags": flags, "cpu_count": os.cpu_count()}
+
+
+def machine() -> str:
+    model = cpu()["cpu_model"]
     return f"{model}, {os.cpu_count()} cores, {platform.system()} {platform.release()}"
 
 
@@ -198,7 +225,7 @@ def run_suites(names: list[str], json_path: str | os.PathLike[str] | None) -> li
     if unknown:
         raise UnknownSuiteError(f"unknown suite {unknown[0]!r}; expected {', '.join(SUITES)}")
     rows: list[dict[str, Any]] = []
-    where = machine()
+    where, on = machine(), cpu()
     for name in names:
         suite = SUITES[name]
         made = (
@@ -209,6 +236,7 @@ def run_suites(names: list[str], json_path: str | os.PathLike[str] | None) -> li
         for row in made:
             row["suite"] = name
             row["machine"] = where
+            row.update(on)
             rows.append(row)
     if json_path is not None:
         with atomic_path(json_path) as tmp:
@@ -235,6 +263,39 @@ def format_ratios(rows: list[dict[str, Any]]) -> str:
                     f"   rtlab is {x:.2f}x faster" if x >= 1 else f"   rtlab is {1 / x:.2f}x slower"
                 )
             lines.append(f"  {name:<16}{r['value']:>10.4f} {r['unit']}{ratio}")
+    lines += format_scaling(rows)
     if rows:
         lines.append(f"machine: {rows[0]['machine']}")
+        if rows[0].get("cpu_flags"):
+            lines.append(f"vector units: {' '.join(rows[0]['cpu_flags'])}")
     return "\n".join(lines)
+
+
+def thread_scaling(rows: list[dict[str, Any]]) -> dict[tuple[str, str, str], float]:
+    """What each renderer gains from the second thread, per suite and case: the 1-thread time
+    over the 2-thread time (or the 2-thread throughput over the 1-thread one), from the rows of
+    one run."""
+    gains = {}
+    for r in rows:
+        if r["threads"] != 2:
+            continue
+        one = [q for q in rows if q["threads"] == 1 and (q.get("suite"), q["case"],
+               q["renderer"], q["metric"]) == (r.get("suite"), r["case"], r["renderer"],
+               r["metric"])]  # fmt: skip
+        if one and one[0]["value"] > 0 and r["value"] > 0:
+            v1, v2 = one[0]["value"], r["value"]
+            gains[(str(r.get("suite", "")), r["case"], r["renderer"])] = (
+                v1 / v2 if r["unit"] == "s" else v2 / v1
+            )
+    return gains
+
+
+def format_scaling(rows: list[dict[str, Any]]) -> list[str]:
+    """A line per suite and case: each renderer's gain from the second thread."""
+    gains = thread_scaling(rows)
+    lines = []
+    for suite, case in sorted({(s, c) for s, c, _ in gains}):
+        each = ", ".join(f"{name} {g:.2f}x" for (s, c, name), g in gains.items()
+                         if (s, c) == (suite, case))  # fmt: skip
+        lines.append(f"{suite + ': ' if suite else ''}{case}, 1 -> 2 threads: {each}")
+    return lines

@@ -190,6 +190,36 @@ def test_bench_rows_have_the_contract_fields():
     assert "ex25-64x32, 1 thread" in text and "rtlab is" in text
 
 
+def test_bench_prints_each_renderers_gain_from_the_second_thread():
+    from reference.bench import format_scaling, thread_scaling
+
+    def row(renderer, threads, value, unit="s", case="ex25"):
+        return {"suite": "classic", "case": case, "renderer": renderer, "threads": threads,
+                "metric": "seconds" if unit == "s" else "mrays_per_s", "value": value,
+                "unit": unit}  # fmt: skip
+
+    rows = [row("rtlab", 1, 0.10), row("rtlab", 2, 0.05), row("povray", 1, 1.0),
+            row("povray", 2, 0.8), row("rtlab", 1, 10.0, "Mrays/s", "bunny"),
+            row("rtlab", 2, 19.0, "Mrays/s", "bunny"),
+            row("embree", 1, 5.0, "Mrays/s", "bunny")]  # fmt: skip
+    gains = thread_scaling(rows)
+    # Times: 1-thread over 2-thread; throughputs: 2-thread over 1-thread; no pair, no entry.
+    assert gains == {("classic", "ex25", "rtlab"): 2.0, ("classic", "ex25", "povray"): 1.25,
+                     ("classic", "bunny", "rtlab"): 1.9}  # fmt: skip
+    lines = format_scaling(rows)
+    assert "classic: ex25, 1 -> 2 threads: rtlab 2.00x, povray 1.25x" in lines
+    assert "classic: bunny, 1 -> 2 threads: rtlab 1.90x" in lines
+
+
+def test_bench_rows_name_the_cpu_and_its_vector_units():
+    from reference.bench import cpu
+
+    info = cpu()
+    assert info["cpu_model"] and info["cpu_count"] >= 1
+    # Every x86-64 has SSE2; the flags listed are the vector units' only.
+    assert "sse2" in info["cpu_flags"] and "fpu" not in info["cpu_flags"]
+
+
 def test_bench_json_through_the_cli(tmp_path, capsys, monkeypatch):
     """`rtlab bench classic --json FILE` through main(), the suite made small (one repeat, one
     thread, 64x32): the JSON file holds the rows with the contract's fields, and the ratios
@@ -211,6 +241,7 @@ def test_bench_json_through_the_cli(tmp_path, capsys, monkeypatch):
         assert r["metric"] == "seconds" and r["unit"] == "s", r
         assert isinstance(r["value"], float) and r["value"] > 0, r
         assert r["suite"] == "classic" and r["machine"], r
+        assert r["cpu_model"] and "sse2" in r["cpu_flags"], r
     assert [p.name for p in js.parent.iterdir()] == ["bench.json"]  # no temporary file left
 
 
