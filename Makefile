@@ -55,7 +55,7 @@ demo: setup
 
 # Speed side by side (a benchmark, not a test): every suite, JSON rows in out/bench.json.
 bench: setup
-	$(VENV)/bin/rtlab bench all --json out/bench.json
+	$(VENV)/bin/rtlab bench all --json out/bench.json --markdown out/bench.md
 
 lint: setup
 	$(VENV)/bin/ruff check .

@@ -257,8 +257,7 @@ def format_ratios(rows: list[dict[str, Any]]) -> str:
         for name, r in group.items():
             ratio = ""
             if ours is not None and name != "rtlab":
-                # seconds: how many times slower the other is; throughput: how many times faster
-                x = r["value"] / ours["value"] if r["unit"] == "s" else ours["value"] / r["value"]
+                x = _ratio(ours, r)
                 ratio = (
                     f"   rtlab is {x:.2f}x faster" if x >= 1 else f"   rtlab is {1 / x:.2f}x slower"
                 )
@@ -269,6 +268,45 @@ def format_ratios(rows: list[dict[str, Any]]) -> str:
         if rows[0].get("cpu_flags"):
             lines.append(f"vector units: {' '.join(rows[0]['cpu_flags'])}")
     return "\n".join(lines)
+
+
+def _ratio(ours: dict[str, Any], theirs: dict[str, Any]) -> float:
+    """How many times faster rtlab is: their time over ours, or our throughput over theirs."""
+    if ours["unit"] == "s":
+        return float(theirs["value"] / ours["value"])
+    return float(ours["value"] / theirs["value"])
+
+
+def format_markdown(rows: list[dict[str, Any]], command: str = "rtlab bench all") -> str:
+    """The rows of one run as a Markdown table for the README: rtlab's figure and every other
+    renderer's with rtlab's speed-up over it (below 1: rtlab is slower), then each renderer's
+    gain from the second thread, the CPU and the command."""
+    rows = [r for r in rows if r["metric"] != "rmse"]
+    others = sorted({r["renderer"] for r in rows} - {"rtlab"})
+    lines = [
+        "| case | threads | rtlab | " + " | ".join(others) + " |",
+        "|---|---|---|" + "---|" * len(others),
+    ]
+    for case, threads, metric in sorted({(r["case"], r["threads"], r["metric"]) for r in rows}):
+        group = {r["renderer"]: r for r in rows if (r["case"], r["threads"], r["metric"]) ==
+                 (case, threads, metric)}  # fmt: skip
+        ours = group.get("rtlab")
+        cells = [f"{ours['value']:.4g} {ours['unit']}" if ours else ""]
+        for name in others:
+            r = group.get(name)
+            if r is None:
+                cells.append("")
+            elif ours is None:
+                cells.append(f"{r['value']:.4g} {r['unit']}")
+            else:
+                cells.append(f"{r['value']:.4g} {r['unit']} (rtlab {_ratio(ours, r):.2f}x)")
+        lines.append(f"| {case} | {threads} | " + " | ".join(cells) + " |")
+    scaling = format_scaling(rows)
+    if scaling:
+        lines += ["", "Gain from the second thread: " + "; ".join(scaling) + "."]
+    if rows:
+        lines += ["", f"CPU: {rows[0]['machine']}. Command: `{command}`."]
+    return "\n".join(lines) + "\n"
 
 
 def thread_scaling(rows: list[dict[str, Any]]) -> dict[tuple[str, str, str], float]:

@@ -220,6 +220,14 @@ def cmd_bench(args: argparse.Namespace) -> None:
     print(format_ratios(rows))
     if args.json:
         print(f"rows in {args.json}")
+    if args.markdown:
+        from reference.bench import format_markdown
+        from tracer.image import atomic_path
+
+        command = f"rtlab bench {args.suite}" + (f" --json {args.json}" if args.json else "")
+        with atomic_path(args.markdown) as tmp:
+            tmp.write_text(format_markdown(rows, command))
+        print(f"table in {args.markdown}")
 
 
 def cmd_check(args: argparse.Namespace) -> None:
@@ -283,6 +291,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("bench", help="speed side by side, as JSON rows and ratios")
     p.add_argument("suite", help="a suite name (classic) or all")
     p.add_argument("--json", help="write the rows here")
+    p.add_argument("--markdown", help="write the figures as a Markdown table here (the README's)")
     p.set_defaults(func=cmd_bench)
 
     p = sub.add_parser("check", help="validate a scene file without rendering")

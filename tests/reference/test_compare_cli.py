@@ -230,10 +230,15 @@ def test_bench_json_through_the_cli(tmp_path, capsys, monkeypatch):
 
     small = partial(suite_classic, repeats=1, threads=(1,), width=64, height=32)
     monkeypatch.setitem(SUITES, "classic", small)
-    js = tmp_path / "out" / "bench.json"
-    assert main(["bench", "classic", "--json", str(js)]) == 0
+    js, md = tmp_path / "out" / "bench.json", tmp_path / "out" / "bench.md"
+    assert main(["bench", "classic", "--json", str(js), "--markdown", str(md)]) == 0
     printed = capsys.readouterr().out
     assert "ex25-64x32, 1 thread (seconds):" in printed and f"rows in {js}" in printed
+    table = md.read_text().splitlines()
+    assert table[0] == "| case | threads | rtlab | mitsuba-llvm | povray |"
+    assert table[2].startswith("| ex25-64x32 | 1 | ") and table[2].count("(rtlab ") == 2
+    assert f"Command: `rtlab bench classic --json {js}`." in table[-1]
+    md.unlink()
     rows = json.loads(js.read_text())
     assert sorted(r["renderer"] for r in rows) == ["mitsuba-llvm", "povray", "rtlab"]
     for r in rows:

@@ -463,7 +463,7 @@ inline Mask trace_level(const Scene &scene, RayL &ray, Mask active, Lanes &coef,
     add_where(active, color, local * coef);
     active &= reflectivity != 0;
     coef *= reflectivity;
-    ray = secondary_ray(hit, f.Ng, R);
+    if (any(active)) ray = secondary_ray(hit, f.Ng, R);
     return active;
     // END SOLUTION
 }
