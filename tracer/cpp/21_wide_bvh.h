@@ -31,6 +31,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <thread>
 #include <vector>
@@ -73,26 +74,44 @@ inline D4 difference_of_products(D4 a, D4 b, D4 c, D4 d) {
     return fma(a, b, -cd) + error;
 }
 
+typedef float F4 __attribute__((vector_size(bvh_width * sizeof(float))));
+
+// The largest float <= x and the smallest float >= x: a box stored in float rounded outward
+// contains the double box it stands for.
+inline float float_down(double x) {
+    float f = float(x);
+    return double(f) > x ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
+}
+inline float float_up(double x) {
+    float f = float(x);
+    return double(f) < x ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
+}
+
 // Four children's boxes: planes[0] their min corners, planes[1] their max corners, per axis,
-// lane c for child c (planes[1 - near] picks the far plane as slab_test() does). A lane without
-// a child holds the empty box (min +infinity, max -infinity), which every ray misses: its near
-// plane gives t = +infinity (infinity minus a finite origin, times a nonzero 1/d of the right
-// sign), its far plane -infinity, with no 0 * infinity anywhere.
-struct WideNode {
-    D4 planes[2][3];
-    int32_t child[bvh_width];  // an inner child: its WideNode; a leaf: its first TriangleBlock
-    int32_t blocks[bvh_width]; // a leaf's number of blocks; 0 for an inner child
-    int32_t triangles[bvh_width]; // a leaf's number of triangles (for RayCounts)
-    int32_t children = 0;         // lanes in use, from lane 0
+// lane c for child c (planes[1 - near] picks the far plane as slab_test() does). Stored in
+// float, rounded outward (float_down() for min, float_up() for max), so a node is two cache
+// lines (128 bytes) instead of four: the traversal of a 100,000-triangle mesh is bound by
+// memory. The test converts them back to double (exactly) and runs slab_test()'s double
+// arithmetic on them: each float box contains the binary hierarchy's double box, so a ray that
+// meets the double box (which slab_test() never misses) meets the float one, and the wide
+// search skips no box the lecture's search would visit; it only visits a few more.
+// A lane without a child holds the empty box (min +infinity, max -infinity), which every ray
+// misses: its near plane gives t = +infinity (infinity minus a finite origin, times a nonzero
+// 1/d of the right sign), its far plane -infinity, with no 0 * infinity anywhere.
+struct alignas(64) WideNode {
+    F4 planes[2][3];
+    int32_t child[bvh_width]; // an inner child: its WideNode; a leaf: -1 - its first block
+    int32_t children = 0;     // lanes in use, from lane 0
 };
 
 // Four triangles of a leaf, vertex by vertex and axis by axis (p[vertex][axis], lane k for the
 // k-th), and each one's index in leaf order (Mesh::leaf_vertices, Mesh::order); -1 pads a
 // block with a triangle whose vertices are all 0, whose edge functions are exactly 0 (det = 0:
-// no hit), and which the candidate loop skips besides.
+// no hit), and which the candidate loop skips besides. `more`: the leaf's next block follows.
 struct TriangleBlock {
     D4 p[3][3];
     int32_t leaf[bvh_width];
+    int32_t more;
 };
 
 // slab_test() (14_box.h) for the four children of a node at once: the same operations, lane
@@ -100,7 +119,10 @@ struct TriangleBlock {
 inline M4 slab_test(const WideNode &node, const SlabRay &r, const Interval &range, D4 &t_near) {
     // BEGIN SOLUTION L09
     // PROMPT: A copy, lane by lane, of slab_test() for the four children of a wide node.
-    const D4 *near_planes[2] = {node.planes[0], node.planes[1]};
+    D4 near_planes[2][3];
+    for (int side = 0; side < 2; ++side)
+        for (int axis = 0; axis < 3; ++axis)
+            near_planes[side][axis] = __builtin_convertvector(node.planes[side][axis], D4);
     D4 tx0 = (near_planes[r.near_x][0] - r.o.x) * r.inv_d.x;
     D4 tx1 = (near_planes[1 - r.near_x][0] - r.o.x) * r.inv_d_far.x;
     D4 ty0 = (near_planes[r.near_y][1] - r.o.y) * r.inv_d.y;
@@ -199,22 +221,19 @@ struct WideBVH : MeshAccelerator {
             for (int axis = 0; axis < 3; ++axis) {
                 if (c == 0) // lanes without a child keep the empty box
                     for (int l = 0; l < bvh_width; ++l)
-                        w.planes[0][axis][l] = infinity, w.planes[1][axis][l] = -infinity;
-                w.planes[0][axis][c] = k.bounds.min[axis];
-                w.planes[1][axis][c] = k.bounds.max[axis];
+                        w.planes[0][axis][l] = std::numeric_limits<float>::infinity(),
+                        w.planes[1][axis][l] = -std::numeric_limits<float>::infinity();
+                w.planes[0][axis][c] = float_down(k.bounds.min[axis]);
+                w.planes[1][axis][c] = float_up(k.bounds.max[axis]);
             }
             w.children = c + 1;
         }
         if (k.count == 0) { // an inner child (collapse() may move `nodes`: index, not reference)
             int child = collapse(mesh, binary);
-            WideNode &w = nodes[size_t(index)];
-            w.child[c] = child, w.blocks[c] = 0, w.triangles[c] = 0;
+            nodes[size_t(index)].child[c] = child;
             return;
         }
-        WideNode &w = nodes[size_t(index)];
-        w.child[c] = int(blocks.size());
-        w.blocks[c] = (k.count + bvh_width - 1) / bvh_width;
-        w.triangles[c] = k.count;
+        nodes[size_t(index)].child[c] = -1 - int(blocks.size());
         for (int first = k.first; first < k.first + k.count; first += bvh_width) {
             TriangleBlock b{};
             for (int l = 0; l < bvh_width; ++l) {
@@ -225,6 +244,7 @@ struct WideBVH : MeshAccelerator {
                         b.p[v][axis][l] =
                             b.leaf[l] < 0 ? 0.0 : mesh.leaf_vertices[3 * size_t(i) + v][axis];
             }
+            b.more = first + bvh_width < k.first + k.count;
             blocks.push_back(b);
         }
     }
@@ -236,26 +256,31 @@ struct WideBVH : MeshAccelerator {
         const WatertightRay wr(ray);
         const SlabRay sr(ray);
         struct Entry {
-            int32_t child, blocks; // blocks > 0: a leaf's first block and count; else a node
+            int32_t child; // as WideNode::child
             double t_near;
         } stack[stack_size];
         int top = 0;
-        stack[top++] = {0, 0, range.min};
+        stack[top++] = {0, range.min};
         bool found = false;
         uint64_t box_tests = 0, primitive_tests = 0;
         while (top > 0) {
             const Entry e = stack[--top];
             if (e.t_near > range.max) continue; // a hit has come nearer meanwhile
-            if (e.blocks > 0) {
-                for (int b = e.child; b < e.child + e.blocks; ++b) {
+            if (e.child < 0) {
+                for (int b = -1 - e.child, more = 1; more; ++b) {
                     const TriangleBlock &block = blocks[size_t(b)];
+                    more = block.more;
                     M4 candidates = triangle_candidates(block, wr, range);
                     for (int l = 0; l < bvh_width; ++l) {
                         const int i = block.leaf[l];
                         if (i < 0) break;
                         ++primitive_tests;
                         if (!candidates[l]) continue;
-                        const Vec3 *v = &mesh.leaf_vertices[3 * size_t(i)];
+                        // The block's own copy of leaf_vertices[3 i ...] (the same doubles):
+                        // no second cache line to wait for.
+                        Vec3 v[3];
+                        for (int k = 0; k < 3; ++k)
+                            v[k] = {block.p[k][0][l], block.p[k][1][l], block.p[k][2][l]};
                         TriangleHit th;
                         if (intersect_triangle(v[0], v[1], v[2], wr, range, th)) {
                             best = th;
@@ -281,7 +306,11 @@ struct WideBVH : MeshAccelerator {
             int n = 0;
             for (int c = 0; c < node.children; ++c) {
                 if (!hit[c]) continue;
-                Entry x{node.child[c], node.blocks[c], t_near[c]};
+                Entry x{node.child[c], t_near[c]};
+                // Ask memory for every child hit now, so that their cache misses overlap
+                // (the search is bound by memory, not arithmetic).
+                if (x.child >= 0) __builtin_prefetch(&nodes[size_t(x.child)]);
+                else __builtin_prefetch(&blocks[size_t(-1 - x.child)]);
                 int k = n++;
                 for (; k > 0 && next[k - 1].t_near < x.t_near; --k) next[k] = next[k - 1];
                 next[k] = x;
