@@ -292,7 +292,8 @@ struct Mesh : Object {
     // The lecture's traverse(), or the faster search where one is built and packets are on.
     bool search(const Ray &ray, const Interval &range, TriangleHit &th, int &t,
                 RayCounts &counts, bool any) const {
-        if (packets && accelerator) return accelerator->traverse(*this, ray, range, th, t, counts, any);
+        if (packets && accelerator)
+            return accelerator->traverse(*this, ray, range, th, t, counts, any);
         return traverse(ray, range, th, t, counts, any);
     }
 
