@@ -120,12 +120,53 @@ def _camera_rays(scene: Any) -> tuple[np.ndarray, np.ndarray]:
     return o, d
 
 
+def diffuse_rays(
+    vertices: np.ndarray, faces: np.ndarray, n: int, seed: int = 12
+) -> tuple[np.ndarray, np.ndarray]:
+    """n incoherent rays leaving a mesh's surface (float64 origins and unit directions): a
+    triangle chosen uniformly by index, a point uniform on it (barycentrics by the square-root
+    map), a cosine-distributed direction about its face normal, and the origin moved off the
+    surface as the core spawns rays (02_ray.h offset_ray_origin(): p's error bound gamma(7)
+    (|b0 p0| + |b1 p1| + |b2 p2|) along Ng, then one ulp further away)."""
+    rng = np.random.default_rng(seed)
+    v = np.asarray(vertices, dtype=np.float64)[np.asarray(faces)[rng.integers(0, len(faces), n)]]
+    r1, r2 = rng.random(n), rng.random(n)
+    s = np.sqrt(r1)
+    b = np.stack([1 - s, s * (1 - r2), s * r2], axis=1)[..., None]  # (n, 3, 1)
+    p = np.sum(b * v, axis=1)
+    u = 2**-53
+    gamma7 = 7 * u / (1 - 7 * u)
+    p_error = gamma7 * np.sum(np.abs(b * v), axis=1)
+    ng = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+    ng /= np.linalg.norm(ng, axis=1, keepdims=True)
+    # Cosine-distributed about ng: a uniform point on the unit disc lifted to the hemisphere.
+    a = np.where(np.abs(ng[:, :1]) > 0.9, [[0.0, 1.0, 0.0]], [[1.0, 0.0, 0.0]])
+    t1 = np.cross(ng, a)
+    t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
+    t2 = np.cross(ng, t1)
+    phi, r = 2 * np.pi * rng.random(n), np.sqrt(rng.random(n))
+    z = np.sqrt(np.maximum(0.0, 1 - r * r))
+    d = (r * np.cos(phi))[:, None] * t1 + (r * np.sin(phi))[:, None] * t2 + z[:, None] * ng
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    offset = np.sum(np.abs(ng) * p_error, axis=1, keepdims=True) * ng  # d . N >= 0: N's side
+    po = p + offset
+    o = np.where(offset != 0, np.nextafter(po, np.copysign(np.inf, offset)), po)
+    return np.ascontiguousarray(o), np.ascontiguousarray(d)
+
+
 def suite_geometry(
-    repeats: int = 3, threads: tuple[int, ...] = (1, 2), width: int = 1920, height: int = 1024
+    repeats: int = 3,
+    threads: tuple[int, ...] = (1, 2),
+    width: int = 1920,
+    height: int = 1024,
+    diffuse: int = 2_000_000,
 ) -> list[dict[str, Any]]:
-    """Primary rays per second on the Stanford bunny (99,785 triangles), closest hit only:
-    rtlab's aov integrator (its hierarchy, double precision, watertight) against Embree's
-    single-ray kernel (embreex, robust=False, float), plus each one's hierarchy build time."""
+    """Rays per second on the Stanford bunny (99,785 triangles), closest hit only, rtlab
+    (its hierarchy, double precision, watertight) against Embree's single-ray kernel (embreex,
+    robust=False, float): ``bunny-primary``, the camera's primary rays (rtlab's aov
+    integrator); ``bunny-diffuse``, ``diffuse`` incoherent rays leaving the bunny's surface
+    (diffuse_rays(); rtlab's batch call closest_mesh_hits, Embree the same rays in float32);
+    plus each one's hierarchy build time."""
     import dataclasses
     import threading
     import time
@@ -133,6 +174,7 @@ def suite_geometry(
     from embreex import rtcore_scene
     from embreex.mesh_construction import TriangleMesh
 
+    from tracer import _core
     from tracer.render import to_core
     from tracer.scene import Mesh
 
@@ -144,7 +186,6 @@ def suite_geometry(
     meshes = tuple(o for o in scene.objects if isinstance(o, Mesh))
     bunny_only = dataclasses.replace(scene, objects=meshes)
     mesh = meshes[0]
-    case, n_rays = "bunny-primary", width * height
     rows: list[dict[str, Any]] = []
 
     def build_rtlab() -> float:
@@ -161,11 +202,11 @@ def suite_geometry(
         embree.run(np.zeros((1, 3), np.float32), np.array([[0, 0, 1]], np.float32))  # commit
         return embree, time.perf_counter() - start
 
-    origins, directions = _camera_rays(bunny_only)
     embree, _ = build_embree()
+    core = to_core(bunny_only)
 
-    def embree_seconds(n: int) -> float:
-        parts = np.array_split(np.arange(n_rays), n)
+    def embree_seconds(origins: np.ndarray, directions: np.ndarray, n: int) -> float:
+        parts = np.array_split(np.arange(len(origins)), n)
         work = [threading.Thread(target=lambda p=p: embree.run(
             origins[p[0]:p[-1] + 1], directions[p[0]:p[-1] + 1], query="INTERSECT", output=1))
             for p in parts]  # fmt: skip
@@ -176,14 +217,29 @@ def suite_geometry(
             t.join()
         return time.perf_counter() - start
 
-    for n in threads:
-        ours = _best(lambda n=n: render_with_stats(bunny_only, threads=n, progress=False).seconds,
-                     2 * repeats + 1)  # fmt: skip
-        theirs = _best(lambda n=n: embree_seconds(n), 2 * repeats + 1)
-        for renderer, seconds in (("rtlab", ours), ("embree", theirs)):
-            rows.append({"case": case, "renderer": renderer, "threads": n,
-                         "metric": "mrays_per_s", "value": n_rays / seconds / 1e6,
-                         "unit": "Mrays/s", "repeats": 2 * repeats + 1})  # fmt: skip
+    def batch_seconds(origins: np.ndarray, directions: np.ndarray, n: int) -> float:
+        start = time.perf_counter()
+        _core.closest_mesh_hits(core, origins, directions, n)
+        return time.perf_counter() - start
+
+    primary_o, primary_d = _camera_rays(bunny_only)
+    diffuse_o, diffuse_d = diffuse_rays(mesh.vertices, mesh.faces, diffuse)
+    diffuse_f32 = (diffuse_o.astype(np.float32), diffuse_d.astype(np.float32))
+    cases = (
+        ("bunny-primary", width * height,
+         lambda n: render_with_stats(bunny_only, threads=n, progress=False).seconds,
+         lambda n: embree_seconds(primary_o, primary_d, n)),
+        ("bunny-diffuse", diffuse, lambda n: batch_seconds(diffuse_o, diffuse_d, n),
+         lambda n: embree_seconds(*diffuse_f32, n)),
+    )  # fmt: skip
+    for case, n_rays, ours_fn, theirs_fn in cases:
+        for n in threads:
+            ours = _best(lambda n=n, f=ours_fn: f(n), 2 * repeats + 1)
+            theirs = _best(lambda n=n, f=theirs_fn: f(n), 2 * repeats + 1)
+            for renderer, seconds in (("rtlab", ours), ("embree", theirs)):
+                rows.append({"case": case, "renderer": renderer, "threads": n,
+                             "metric": "mrays_per_s", "value": n_rays / seconds / 1e6,
+                             "unit": "Mrays/s", "repeats": 2 * repeats + 1})  # fmt: skip
     for renderer, fn in (("rtlab", build_rtlab), ("embree", lambda: build_embree()[1])):
         rows.append({"case": "bunny-bvh-build", "renderer": renderer, "threads": 1,
                      "metric": "seconds", "value": _best(fn, repeats), "unit": "s",

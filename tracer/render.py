@@ -378,7 +378,9 @@ def _render_camera(
     callback, close = _progress_bar() if progress else (None, lambda: None)
     start = time.perf_counter()
     try:
-        image, rays, ran = _core.render(core, threads, callback, core_integrator(scene, packets))
+        image, rays, ran = _core.render(
+            core, threads, callback, core_integrator(scene, packets), packets
+        )
     finally:
         close()
     return RenderResult(image, dict(rays), time.perf_counter() - start, threads, ran.name)

@@ -12,6 +12,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "01_vec3.h"
@@ -51,6 +52,18 @@ inline Vec3 smooth_normal(const TriangleHit &th, const Vec3 &n0, const Vec3 &n1,
     // END SOLUTION
 }
 
+struct Mesh;
+
+// A faster search of a built mesh (21_wide_bvh.h), beside the lecture's traverse(): the same
+// closest hit (or any hit) from a hierarchy of its own. Mesh::hit() and blocks() use it when
+// `packets` is set (render_with_stats(packets=True), the default); packets=False keeps the
+// lecture's one-ray code below, as student builds run it.
+struct MeshAccelerator {
+    virtual ~MeshAccelerator() = default;
+    virtual bool traverse(const Mesh &mesh, const Ray &ray, Interval range, TriangleHit &best,
+                          int &best_triangle, RayCounts &counts, bool any) const = 0;
+};
+
 struct Mesh : Object {
     // The deepest a leaf may lie. The traversal keeps at most one waiting node per level on its
     // stack, so a stack of max_tree_depth + 1 entries cannot overflow; 60 levels of a tree that
@@ -67,6 +80,9 @@ struct Mesh : Object {
     // Where one mesh holds the flat triangles of several scene objects: each face's object and
     // material (empty: all are this mesh's own).
     std::vector<int> triangle_object, triangle_material;
+    // The faster search (none until one is built for this mesh), and whether to use it.
+    std::shared_ptr<const MeshAccelerator> accelerator;
+    bool packets = true;
 
     // -- building -------------------------------------------------------------------------
     AABB triangle_box(int t) const {
@@ -273,10 +289,18 @@ struct Mesh : Object {
         // END SOLUTION
     }
 
+    // The lecture's traverse(), or the faster search where one is built and packets are on.
+    bool search(const Ray &ray, const Interval &range, TriangleHit &th, int &t,
+                RayCounts &counts, bool any) const {
+        if (packets && accelerator)
+            return accelerator->traverse(*this, ray, range, th, t, counts, any);
+        return traverse(ray, range, th, t, counts, any);
+    }
+
     bool hit(const Ray &ray, const Interval &range, Hit &hit, RayCounts &counts) const override {
         TriangleHit th;
         int t = -1;
-        if (!traverse(ray, range, th, t, counts, false)) return false;
+        if (!search(ray, range, th, t, counts, false)) return false;
         const std::array<int, 3> &tri = triangles[size_t(t)];
         triangle_hit(vertices[size_t(tri[0])], vertices[size_t(tri[1])], vertices[size_t(tri[2])],
                      th, hit);
@@ -291,7 +315,7 @@ struct Mesh : Object {
     bool blocks(const Ray &ray, const Interval &range, RayCounts &counts) const override {
         TriangleHit th;
         int t = -1;
-        return traverse(ray, range, th, t, counts, true);
+        return search(ray, range, th, t, counts, true);
     }
 };
 

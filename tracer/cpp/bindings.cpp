@@ -35,6 +35,7 @@
 #include "18_torus.h"
 #include "19_aov.h"
 #include "20_path.h"
+#include "21_wide_bvh.h"
 #include "constants.h"
 #include "power.h"
 
@@ -104,7 +105,9 @@ enum class Integrator { classic, classic_packets, aov, path };
 // time, and the caller learns so.
 static std::tuple<Image, nb::dict, Integrator> render(const rt::Scene &scene, int threads,
                                                       nb::object progress,
-                                                      Integrator integrator) {
+                                                      Integrator integrator, bool packets) {
+    // packets: also the meshes' faster search (21_wide_bvh.h), under every integrator.
+    rt::set_mesh_packets(scene, packets);
     if (integrator == Integrator::classic_packets && !rt::packets_serve(scene))
         integrator = Integrator::classic;
     const int width = scene.camera.width, height = scene.camera.height;
@@ -310,6 +313,7 @@ NB_MODULE(_core, m) {
                 {
                     nb::gil_scoped_release release;
                     mesh->build();
+                    rt::build_accelerator(*mesh); // 21_wide_bvh.h, for packets=True
                 }
                 mesh->object = object, mesh->material = material;
                 s.objects.push_back(mesh);
@@ -353,9 +357,10 @@ NB_MODULE(_core, m) {
         .value("path", Integrator::path, "Monte Carlo path tracing");
 
     m.def("render", &render, "scene"_a, "threads"_a, "progress"_a = nb::none(),
-          "integrator"_a = Integrator::classic_packets,
+          "integrator"_a = Integrator::classic_packets, "packets"_a = true,
           "Render to a float32 (height, width, channels) array: 3 channels, or 5 for aov. "
-          "Returns (image, ray counts, the integrator that ran).");
+          "packets=False: meshes searched by the lecture's one-ray traversal, not the wide "
+          "hierarchy (21_wide_bvh.h). Returns (image, ray counts, the integrator that ran).");
     // Whether this build checks memory and undefined behaviour (CMake's RTLAB_SANITIZE; `make
     // sanitize` checks it is testing such a build).
 #if defined(__SANITIZE_ADDRESS__)
@@ -441,6 +446,33 @@ NB_MODULE(_core, m) {
         "as the renderer finds it (closest_hit): (hit, t, p, p_error, Ng, object), each a view "
         "of one (N, 12) block; hit and object as float64 (1/0, index or -1), t infinity on a "
         "miss.");
+    m.def(
+        "closest_mesh_hits",
+        [](const rt::Scene &s, Rays origins, Rays directions, int threads, bool packets) {
+            const size_t n = origins.shape(0);
+            if (directions.shape(0) != n)
+                throw std::invalid_argument("one direction per origin expected");
+            if (threads < 1) throw std::invalid_argument("threads must be at least 1");
+            double *t = new double[n];
+            nb::capsule t_owner(t, [](void *p) noexcept { delete[] static_cast<double *>(p); });
+            int32_t *ids = new int32_t[2 * n]; // objects, then triangles
+            nb::capsule ids_owner(ids,
+                                  [](void *p) noexcept { delete[] static_cast<int32_t *>(p); });
+            {
+                nb::gil_scoped_release release;
+                rt::set_mesh_packets(s, packets);
+                rt::closest_mesh_hits(s, origins.data(), directions.data(), n, threads, t, ids,
+                                      ids + n);
+            }
+            using Ids = nb::ndarray<nb::numpy, int32_t, nb::shape<-1>>;
+            return std::make_tuple(Column(t, {n}, t_owner), Ids(ids, {n}, ids_owner),
+                                   Ids(ids + n, {n}, ids_owner));
+        },
+        "scene"_a, "origins"_a, "directions"_a, "threads"_a = 1, "packets"_a = true,
+        "For each ray (origins, directions: (N, 3) float64) the closest hit with the scene's "
+        "meshes only, t in (0, infinity), on `threads` threads: (t, object, triangle), t "
+        "infinity and -1 on a miss; triangle is the face's index in its mesh. packets=False: "
+        "the lecture's one-ray traversal, else the wide hierarchy (21_wide_bvh.h).");
     m.def(
         "occluded",
         [ray_at](const rt::Scene &s, Rays origins, Rays directions,

@@ -1,0 +1,385 @@
+// Slide "Efficiency and Complexity": "Efficiency is a HUGE deal". The mesh's hierarchy
+// (16_mesh.h) searched faster, with the same answer: a wider tree whose boxes and triangles are
+// tested four at a time in SIMD (GCC/Clang vector extensions: one AVX2 register of 4 doubles,
+// two SSE2 ones where AVX2 is missing).
+//
+// - A 4-wide hierarchy collapsed from the binary SAH one (Wald, Benthin, Boulos, "Getting Rid of
+//   Packets", 2008; the "BVH4" of Embree and tinybvh): each wide node takes the place of a
+//   binary node and up to three levels below it, opening the child of largest surface area
+//   until it has four children. A ray visits about half as many nodes, each a single 4-lane
+//   slab test in double precision, the same arithmetic as slab_test() lane by lane (so just as
+//   conservative: it never misses a box the ray touches).
+// - The triangles of a leaf side by side in structure-of-arrays form (TriangleBlock), four at
+//   a time through the first steps of intersect_triangle() (shear, edge functions, range), the
+//   same operations in the same order lane by lane: the build forbids fused multiply-add
+//   contraction, and difference_of_products() uses an explicit correctly rounded fma per lane,
+//   so each lane computes bit for bit what the one-ray code computes. A lane that survives is
+//   then tested by intersect_triangle() itself, in leaf order with the range shrunk by each hit,
+//   as leaf_hit() does: a leaf gives exactly leaf_hit()'s answer, and the hit record is the
+//   one-ray code's.
+//
+// What may differ from Mesh::traverse() is only the order in which leaves are visited (nearest
+// child box first, among four instead of two). Where two triangles are hit at the same t (an
+// edge they share) a traversal keeps the one it visits last, so either may be kept; the test
+// tests/tracer/test_wide_bvh.py renders the mesh scenes both ways and requires equal pixels
+// except where such a tie is shown. Counts: every child box tested is one box test, every real
+// triangle of a leaf one primitive test (the padding of a block is not counted).
+#pragma once
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <thread>
+#include <vector>
+
+#if defined(__FMA__)
+#include <immintrin.h>
+#endif
+
+#include "01_vec3.h"
+#include "02_ray.h"
+#include "04_hit.h"
+#include "09_scene.h"
+#include "14_box.h"
+#include "15_triangle.h"
+#include "16_mesh.h"
+#include "constants.h"
+
+namespace rt {
+
+constexpr int bvh_width = 4; // children per wide node, triangles per block
+typedef double D4 __attribute__((vector_size(bvh_width * sizeof(double))));
+typedef int64_t M4 __attribute__((vector_size(bvh_width * sizeof(int64_t)))); // true: all ones
+
+// a b + c, rounded once, per lane: AVX2's vfmadd where the machine has it, else the library's
+// fma lane by lane (correctly rounded too, so the bits are the same on every machine).
+inline D4 fma(D4 a, D4 b, D4 c) {
+#if defined(__FMA__)
+    return _mm256_fmadd_pd(a, b, c);
+#else
+    D4 r;
+    for (int k = 0; k < bvh_width; ++k) r[k] = std::fma(a[k], b[k], c[k]);
+    return r;
+#endif
+}
+
+// 15_triangle.h's difference_of_products(), lane by lane.
+inline D4 difference_of_products(D4 a, D4 b, D4 c, D4 d) {
+    D4 cd = c * d;
+    D4 error = fma(-c, d, cd);
+    return fma(a, b, -cd) + error;
+}
+
+typedef float F4 __attribute__((vector_size(bvh_width * sizeof(float))));
+
+// The largest float <= x and the smallest float >= x: a box stored in float rounded outward
+// contains the double box it stands for.
+inline float float_down(double x) {
+    float f = float(x);
+    return double(f) > x ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
+}
+inline float float_up(double x) {
+    float f = float(x);
+    return double(f) < x ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
+}
+
+// Four children's boxes: planes[0] their min corners, planes[1] their max corners, per axis,
+// lane c for child c (planes[1 - near] picks the far plane as slab_test() does). Stored in
+// float, rounded outward (float_down() for min, float_up() for max), so a node is two cache
+// lines (128 bytes) instead of four: the traversal of a 100,000-triangle mesh is bound by
+// memory. The test converts them back to double (exactly) and runs slab_test()'s double
+// arithmetic on them: each float box contains the binary hierarchy's double box, so a ray that
+// meets the double box (which slab_test() never misses) meets the float one, and the wide
+// search skips no box the lecture's search would visit; it only visits a few more.
+// A lane without a child holds the empty box (min +infinity, max -infinity), which every ray
+// misses: its near plane gives t = +infinity (infinity minus a finite origin, times a nonzero
+// 1/d of the right sign), its far plane -infinity, with no 0 * infinity anywhere.
+struct alignas(64) WideNode {
+    F4 planes[2][3];
+    int32_t child[bvh_width]; // an inner child: its WideNode; a leaf: -1 - its first block
+    int32_t children = 0;     // lanes in use, from lane 0
+};
+
+// Four triangles of a leaf, vertex by vertex and axis by axis (p[vertex][axis], lane k for the
+// k-th), and each one's index in leaf order (Mesh::leaf_vertices, Mesh::order); -1 pads a
+// block with a triangle whose vertices are all 0, whose edge functions are exactly 0 (det = 0:
+// no hit), and which the candidate loop skips besides. `more`: the leaf's next block follows.
+struct TriangleBlock {
+    D4 p[3][3];
+    int32_t leaf[bvh_width];
+    int32_t more;
+};
+
+// slab_test() (14_box.h) for the four children of a node at once: the same operations, lane
+// by lane, in the same order.
+inline M4 slab_test(const WideNode &node, const SlabRay &r, const Interval &range, D4 &t_near) {
+    // BEGIN SOLUTION L09
+    // PROMPT: A copy, lane by lane, of slab_test() for the four children of a wide node.
+    D4 near_planes[2][3];
+    for (int side = 0; side < 2; ++side)
+        for (int axis = 0; axis < 3; ++axis)
+            near_planes[side][axis] = __builtin_convertvector(node.planes[side][axis], D4);
+    D4 tx0 = (near_planes[r.near_x][0] - r.o.x) * r.inv_d.x;
+    D4 tx1 = (near_planes[1 - r.near_x][0] - r.o.x) * r.inv_d_far.x;
+    D4 ty0 = (near_planes[r.near_y][1] - r.o.y) * r.inv_d.y;
+    D4 ty1 = (near_planes[1 - r.near_y][1] - r.o.y) * r.inv_d_far.y;
+    D4 tz0 = (near_planes[r.near_z][2] - r.o.z) * r.inv_d.z;
+    D4 tz1 = (near_planes[1 - r.near_z][2] - r.o.z) * r.inv_d_far.z;
+    D4 lo = D4{} + range.min, hi = D4{} + range.max;
+    lo = tx0 > lo ? tx0 : lo, hi = tx1 < hi ? tx1 : hi;
+    lo = ty0 > lo ? ty0 : lo, hi = ty1 < hi ? ty1 : hi;
+    lo = tz0 > lo ? tz0 : lo, hi = tz1 < hi ? tz1 : hi;
+    t_near = lo;
+    return lo <= hi;
+    // END SOLUTION
+}
+
+// The first steps of intersect_triangle() (15_triangle.h) for a block's four triangles: true
+// for each lane that passes the inside test, det != 0 and the range test, exactly the lanes
+// whose intersect_triangle() gets past them (the same operations in the same order). Only
+// those go on to the rest of the test (the t-error guard), in intersect_triangle() itself.
+inline M4 triangle_candidates(const TriangleBlock &block, const WatertightRay &r,
+                              const Interval &range) {
+    // BEGIN SOLUTION L08
+    // PROMPT: A copy, lane by lane, of intersect_triangle()'s shear, edge functions and range
+    // PROMPT: test for the four triangles of a block.
+    const int kx = r.kx, ky = r.ky, kz = r.kz;
+    const D4(&p0)[3] = block.p[0], (&p1)[3] = block.p[1], (&p2)[3] = block.p[2];
+    D4 a_x = p0[kx] - r.o[kx], a_y = p0[ky] - r.o[ky], a_z = p0[kz] - r.o[kz];
+    D4 b_x = p1[kx] - r.o[kx], b_y = p1[ky] - r.o[ky], b_z = p1[kz] - r.o[kz];
+    D4 c_x = p2[kx] - r.o[kx], c_y = p2[ky] - r.o[ky], c_z = p2[kz] - r.o[kz];
+    D4 ax = a_x + r.Sx * a_z, ay = a_y + r.Sy * a_z;
+    D4 bx = b_x + r.Sx * b_z, by = b_y + r.Sy * b_z;
+    D4 cx = c_x + r.Sx * c_z, cy = c_y + r.Sy * c_z;
+    D4 e0 = difference_of_products(bx, cy, by, cx);
+    D4 e1 = difference_of_products(cx, ay, cy, ax);
+    D4 e2 = difference_of_products(ax, by, ay, bx);
+    M4 outside = ((e0 < 0) | (e1 < 0) | (e2 < 0)) & ((e0 > 0) | (e1 > 0) | (e2 > 0));
+    D4 det = e0 + e1 + e2;
+    D4 az = r.Sz * a_z, bz = r.Sz * b_z, cz = r.Sz * c_z;
+    D4 t_scaled = e0 * az + e1 * bz + e2 * cz;
+    D4 lo = range.min * det, hi = range.max * det;
+    M4 out_negative = (det < 0) & ((t_scaled >= lo) | (t_scaled < hi));
+    M4 out_positive = (det > 0) & ((t_scaled <= lo) | (t_scaled > hi));
+    return ~(outside | (det == 0) | out_negative | out_positive);
+    // END SOLUTION
+}
+
+struct WideBVH : MeshAccelerator {
+    std::vector<WideNode> nodes; // nodes[0] is the root
+    std::vector<TriangleBlock> blocks;
+
+    // The deepest stack: a wide node lies at least one binary level below its parent, so at
+    // most max_tree_depth + 1 levels; each visit takes one entry and leaves up to four.
+    static constexpr int stack_size = 3 * (Mesh::max_tree_depth + 1) + 2;
+
+    explicit WideBVH(const Mesh &mesh) {
+        nodes.reserve(mesh.nodes.size() / 2 + 1);
+        blocks.reserve(mesh.order.size() / 2 + 1);
+        const BVHNode &root = mesh.nodes[0];
+        if (root.count > 0) { // one leaf: a wide root with that one child
+            nodes.emplace_back();
+            set_child(mesh, 0, 0, 0);
+        } else
+            collapse(mesh, 0);
+    }
+
+    // A wide node in place of the binary inner node `binary`: its children, then the child of
+    // largest surface area among the inner ones opened in place (its two children take its
+    // lane and the next), until there are four or only leaves. Returns the wide node's index.
+    int collapse(const Mesh &mesh, int binary) {
+        const int index = int(nodes.size());
+        nodes.emplace_back();
+        int kids[bvh_width] = {binary + 1, mesh.nodes[size_t(binary)].first};
+        int n = 2;
+        while (n < bvh_width) {
+            int open = -1;
+            double largest = -1;
+            for (int c = 0; c < n; ++c) {
+                const BVHNode &k = mesh.nodes[size_t(kids[c])];
+                if (k.count == 0 && k.bounds.area() > largest) largest = k.bounds.area(), open = c;
+            }
+            if (open < 0) break;
+            const int opened = kids[open];
+            for (int c = n; c > open + 1; --c) kids[c] = kids[c - 1];
+            kids[open] = opened + 1;
+            kids[open + 1] = mesh.nodes[size_t(opened)].first;
+            ++n;
+        }
+        for (int c = 0; c < n; ++c) set_child(mesh, index, c, kids[c]);
+        return index;
+    }
+
+    void set_child(const Mesh &mesh, int index, int c, int binary) {
+        const BVHNode &k = mesh.nodes[size_t(binary)];
+        {
+            WideNode &w = nodes[size_t(index)];
+            for (int axis = 0; axis < 3; ++axis) {
+                if (c == 0) // lanes without a child keep the empty box
+                    for (int l = 0; l < bvh_width; ++l)
+                        w.planes[0][axis][l] = std::numeric_limits<float>::infinity(),
+                        w.planes[1][axis][l] = -std::numeric_limits<float>::infinity();
+                w.planes[0][axis][c] = float_down(k.bounds.min[axis]);
+                w.planes[1][axis][c] = float_up(k.bounds.max[axis]);
+            }
+            w.children = c + 1;
+        }
+        if (k.count == 0) { // an inner child (collapse() may move `nodes`: index, not reference)
+            int child = collapse(mesh, binary);
+            nodes[size_t(index)].child[c] = child;
+            return;
+        }
+        nodes[size_t(index)].child[c] = -1 - int(blocks.size());
+        for (int first = k.first; first < k.first + k.count; first += bvh_width) {
+            TriangleBlock b{};
+            for (int l = 0; l < bvh_width; ++l) {
+                const int i = first + l;
+                b.leaf[l] = i < k.first + k.count ? i : -1;
+                for (int v = 0; v < 3; ++v)
+                    for (int axis = 0; axis < 3; ++axis)
+                        b.p[v][axis][l] =
+                            b.leaf[l] < 0 ? 0.0 : mesh.leaf_vertices[3 * size_t(i) + v][axis];
+            }
+            b.more = first + bvh_width < k.first + k.count;
+            blocks.push_back(b);
+        }
+    }
+
+    // Mesh::traverse()'s answer (see the top of this file), nearest child first.
+    bool traverse(const Mesh &mesh, const Ray &ray, Interval range, TriangleHit &best,
+                  int &best_triangle, RayCounts &counts, bool any) const override {
+        if (nodes.empty()) return false;
+        const WatertightRay wr(ray);
+        const SlabRay sr(ray);
+        struct Entry {
+            int32_t child; // as WideNode::child
+            double t_near;
+        } stack[stack_size];
+        int top = 0;
+        stack[top++] = {0, range.min};
+        bool found = false;
+        uint64_t box_tests = 0, primitive_tests = 0;
+        while (top > 0) {
+            const Entry e = stack[--top];
+            if (e.t_near > range.max) continue; // a hit has come nearer meanwhile
+            if (e.child < 0) {
+                for (int b = -1 - e.child, more = 1; more; ++b) {
+                    const TriangleBlock &block = blocks[size_t(b)];
+                    more = block.more;
+                    M4 candidates = triangle_candidates(block, wr, range);
+                    for (int l = 0; l < bvh_width; ++l) {
+                        const int i = block.leaf[l];
+                        if (i < 0) break;
+                        ++primitive_tests;
+                        if (!candidates[l]) continue;
+                        // The block's own copy of leaf_vertices[3 i ...] (the same doubles):
+                        // no second cache line to wait for.
+                        Vec3 v[3];
+                        for (int k = 0; k < 3; ++k)
+                            v[k] = {block.p[k][0][l], block.p[k][1][l], block.p[k][2][l]};
+                        TriangleHit th;
+                        if (intersect_triangle(v[0], v[1], v[2], wr, range, th)) {
+                            best = th;
+                            best_triangle = mesh.order[size_t(i)];
+                            range.max = th.t;
+                            found = true;
+                            if (any) {
+                                counts.box_tests += box_tests;
+                                counts.primitive_tests += primitive_tests;
+                                return true;
+                            }
+                        }
+                    }
+                }
+                continue;
+            }
+            const WideNode &node = nodes[size_t(e.child)];
+            box_tests += uint64_t(node.children);
+            D4 t_near;
+            const M4 hit = slab_test(node, sr, range, t_near);
+            // The children hit, pushed farthest first so that the nearest is taken next.
+            Entry next[bvh_width];
+            int n = 0;
+            for (int c = 0; c < node.children; ++c) {
+                if (!hit[c]) continue;
+                Entry x{node.child[c], t_near[c]};
+                // Ask memory for every child hit now, so that their cache misses overlap
+                // (the search is bound by memory, not arithmetic).
+                if (x.child >= 0) __builtin_prefetch(&nodes[size_t(x.child)]);
+                else __builtin_prefetch(&blocks[size_t(-1 - x.child)]);
+                int k = n++;
+                for (; k > 0 && next[k - 1].t_near < x.t_near; --k) next[k] = next[k - 1];
+                next[k] = x;
+            }
+            for (int k = 0; k < n; ++k) stack[top++] = next[k];
+        }
+        counts.box_tests += box_tests;
+        counts.primitive_tests += primitive_tests;
+        return found;
+    }
+};
+
+// The wide hierarchy of a mesh built with Acceleration::bvh (none for the other kinds, which
+// exist to count what a hierarchy saves and keep the lecture's search).
+inline void build_accelerator(Mesh &mesh) {
+    mesh.accelerator.reset();
+    if (mesh.acceleration == Acceleration::bvh && !mesh.nodes.empty() && !mesh.order.empty())
+        mesh.accelerator = std::make_shared<const WideBVH>(mesh);
+}
+
+// render_with_stats(packets=...) for every mesh of the scene, set before a render starts (never
+// during one). The scene holds its objects as const so that tracing cannot change them; every
+// mesh in it was made non-const by the bindings' add_mesh, so the cast is well defined.
+inline void set_mesh_packets(const Scene &scene, bool packets) {
+    for (const auto &object : scene.objects)
+        if (const auto *mesh = dynamic_cast<const Mesh *>(object.get()))
+            const_cast<Mesh *>(mesh)->packets = packets;
+}
+
+// The closest hit of each of n rays (origins and directions: n x 3 doubles, row-major) with the
+// scene's meshes (spheres, planes and other objects are not searched), t in (0, infinity), with
+// `threads` threads taking chunks of rays in turn: t (infinity on a miss), the object (-1) and
+// the triangle's index in its mesh (-1). What `rtlab bench geometry` times against Embree.
+inline void closest_mesh_hits(const Scene &scene, const double *origins,
+                              const double *directions, size_t n, int threads, double *t_out,
+                              int32_t *object_out, int32_t *triangle_out) {
+    std::vector<const Mesh *> meshes;
+    for (const auto &object : scene.objects)
+        if (const auto *mesh = dynamic_cast<const Mesh *>(object.get())) meshes.push_back(mesh);
+    constexpr size_t chunk = 4096; // rays per turn: one atomic increment per 4096 rays
+    std::atomic<size_t> next{0};
+    auto work = [&] {
+        RayCounts counts;
+        for (size_t start; (start = next.fetch_add(chunk)) < n;) {
+            for (size_t i = start; i < std::min(n, start + chunk); ++i) {
+                const double *o = origins + 3 * i, *d = directions + 3 * i;
+                const Ray ray{{o[0], o[1], o[2]}, {d[0], d[1], d[2]}};
+                Interval range{0, infinity};
+                int object = -1, triangle = -1;
+                for (const Mesh *mesh : meshes) {
+                    TriangleHit th;
+                    int t = -1;
+                    if (mesh->search(ray, range, th, t, counts, false)) {
+                        range.max = th.t, triangle = t;
+                        object = mesh->triangle_object.empty() ? mesh->object
+                                                               : mesh->triangle_object[size_t(t)];
+                    }
+                }
+                t_out[i] = object >= 0 ? range.max : infinity;
+                object_out[i] = object;
+                triangle_out[i] = triangle;
+            }
+        }
+    };
+    threads = std::max(1, threads);
+    std::vector<std::thread> pool;
+    for (int k = 1; k < threads; ++k) pool.emplace_back(work);
+    work();
+    for (std::thread &t : pool) t.join();
+}
+
+} // namespace rt
