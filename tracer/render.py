@@ -131,7 +131,8 @@ class RenderResult:
     threads: int
     #: what traced the image: "classic" (one ray at a time), "classic_packets" (a packet of rays
     #: at a time: scenes of spheres and planes only, so packets=True falls back to "classic"
-    #: elsewhere), "aov" or "path".
+    #: elsewhere), "aov", "aov_packets" (packets of primary rays: scenes of meshes only, with
+    #: packets=True) or "path".
     integrator: str = "classic"
 
 

@@ -25,6 +25,7 @@ struct WatertightRay {
     int kx, ky, kz; // the axis of d's largest component becomes z; x, y keep the winding
     double Sx, Sy, Sz;
 
+    WatertightRay() = default; // filled in later (a packet's rays, 22_mesh_packets.h)
     explicit WatertightRay(const Ray &ray) : o(ray.o), d(ray.d) {
         Vec3 a = abs(ray.d);
         kz = a.x > a.y ? (a.x > a.z ? 0 : 2) : (a.y > a.z ? 1 : 2);

@@ -301,6 +301,13 @@ struct Mesh : Object {
         TriangleHit th;
         int t = -1;
         if (!search(ray, range, th, t, counts, false)) return false;
+        record(th, t, hit);
+        return true;
+    }
+
+    // The hit record of triangle t hit at th: the point, its error bound and the normals
+    // (triangle_hit()), the shading normal where the mesh is smooth, the object and material.
+    void record(const TriangleHit &th, int t, Hit &hit) const {
         const std::array<int, 3> &tri = triangles[size_t(t)];
         triangle_hit(vertices[size_t(tri[0])], vertices[size_t(tri[1])], vertices[size_t(tri[2])],
                      th, hit);
@@ -309,7 +316,6 @@ struct Mesh : Object {
                                   normals[size_t(tri[2])], hit.Ng);
         hit.object = triangle_object.empty() ? object : triangle_object[size_t(t)];
         hit.material = triangle_material.empty() ? material : triangle_material[size_t(t)];
-        return true;
     }
 
     bool blocks(const Ray &ray, const Interval &range, RayCounts &counts) const override {

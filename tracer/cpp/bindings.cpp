@@ -9,8 +9,11 @@
 #include <nanobind/stl/tuple.h>
 #include <nanobind/stl/vector.h>
 
+#include <sys/mman.h>
+
 #include <array>
 #include <cstddef>
+#include <cstdlib>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -36,6 +39,7 @@
 #include "19_aov.h"
 #include "20_path.h"
 #include "21_wide_bvh.h"
+#include "22_mesh_packets.h"
 #include "constants.h"
 #include "power.h"
 
@@ -96,13 +100,28 @@ static rt::Transform transform_from(const std::optional<Matrix34> &m) {
 // time (10_classic.h, the lecture's code as written) or a packet of rays at a time
 // (12_packet.h; the same image), the arbitrary output variables (19_aov.h), or paths
 // (20_path.h).
-enum class Integrator { classic, classic_packets, aov, path };
+enum class Integrator { classic, classic_packets, aov, path, aov_packets };
 
 // Render with the GIL released. Every poll interval (11_render.h) the watching thread takes the
 // GIL to check for Ctrl-C and to report progress; an exception from either cancels the render
 // and is re-raised. Returns the image, the ray counts and the integrator that ran: packets
 // asked of a scene they do not serve (packets_serve(), 12_packet.h) fall back to one ray at a
 // time, and the caller learns so.
+// The image's memory. The kernel maps a fresh page only when it is first written, one fault
+// per 4 KiB page: a 1920 x 1024 aov image (5 floats a pixel, 39 MB, above the size whose freed
+// memory the C library keeps for reuse) took 9,600 faults in every render, with the render
+// threads queueing on the lock of the process's memory map. Aligned to 2 MiB and marked
+// MADV_HUGEPAGE (a hint the kernel may ignore; with transparent huge pages in "madvise" mode,
+// as here, the only way to get them), it is mapped in 2 MiB pages: 20 faults.
+static float *allocate_image(size_t floats) {
+    constexpr size_t huge_page = size_t(2) << 20;
+    const size_t bytes = (floats * sizeof(float) + huge_page - 1) / huge_page * huge_page;
+    void *p = std::aligned_alloc(huge_page, bytes);
+    if (p == nullptr) throw std::bad_alloc();
+    madvise(p, bytes, MADV_HUGEPAGE);
+    return static_cast<float *>(p);
+}
+
 static std::tuple<Image, nb::dict, Integrator> render(const rt::Scene &scene, int threads,
                                                       nb::object progress,
                                                       Integrator integrator, bool packets) {
@@ -110,11 +129,14 @@ static std::tuple<Image, nb::dict, Integrator> render(const rt::Scene &scene, in
     rt::set_mesh_packets(scene, packets);
     if (integrator == Integrator::classic_packets && !rt::packets_serve(scene))
         integrator = Integrator::classic;
+    if (integrator == Integrator::aov && packets && rt::mesh_packets_serve(scene))
+        integrator = Integrator::aov_packets; // 22_mesh_packets.h: scenes of meshes
     const int width = scene.camera.width, height = scene.camera.height;
-    const size_t channels = integrator == Integrator::aov ? rt::aov_channels : 3;
+    const bool aov = integrator == Integrator::aov || integrator == Integrator::aov_packets;
+    const size_t channels = aov ? rt::aov_channels : 3;
     // Not zeroed: every pixel is written (a cancelled render raises instead of returning).
-    float *data = new float[size_t(width) * size_t(height) * channels];
-    nb::capsule owner(data, [](void *p) noexcept { delete[] static_cast<float *>(p); });
+    float *data = allocate_image(size_t(width) * size_t(height) * channels);
+    nb::capsule owner(data, [](void *p) noexcept { std::free(p); });
     bool failed = false;
     rt::RenderResult result;
     {
@@ -142,6 +164,7 @@ static std::tuple<Image, nb::dict, Integrator> render(const rt::Scene &scene, in
         case Integrator::classic: tiles = rt::render_tile_rays; break;
         case Integrator::classic_packets: tiles = rt::render_tile_packets; break;
         case Integrator::aov: tiles = rt::render_tile_aov; break;
+        case Integrator::aov_packets: tiles = rt::render_tile_aov_packets; break;
         case Integrator::path:
             context = std::make_unique<rt::PathContext>(scene);
             tiles = [&](const rt::Scene &, int x0, int y0, int x1, int y1, float *out,
@@ -354,7 +377,9 @@ NB_MODULE(_core, m) {
                "the classic model, a packet of rays at a time where the scene allows (spheres "
                "and planes only), else one ray at a time; the same image")
         .value("aov", Integrator::aov, "depth, object index and normal of the primary hits")
-        .value("path", Integrator::path, "Monte Carlo path tracing");
+        .value("path", Integrator::path, "Monte Carlo path tracing")
+        .value("aov_packets", Integrator::aov_packets,
+               "aov, packets of primary rays through the meshes' hierarchies (scenes of meshes)");
 
     m.def("render", &render, "scene"_a, "threads"_a, "progress"_a = nb::none(),
           "integrator"_a = Integrator::classic_packets, "packets"_a = true,

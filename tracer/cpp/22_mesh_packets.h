@@ -1,0 +1,323 @@
+// Slide "Efficiency and Complexity": the mesh's hierarchy (16_mesh.h) searched by a packet of
+// rays_per_packet neighbouring primary rays at once (Wald, Slusallek, Benthin and Wagner,
+// "Interactive Rendering with Coherent Ray Tracing", 2001). Rays through neighbouring pixels
+// cross nearly the same boxes, so the packet fetches each box once for all of them and tests
+// it against all of them in one vector instruction per step; one ray's search fetches and
+// tests it alone. The packet visits a box when any of its rays meets it, and each ray keeps its
+// own range, so a ray sees a few boxes more than its own search would, never fewer.
+//
+// Each ray's answer is its own search's: the box test is slab_test()'s arithmetic lane by lane
+// (a lane's decision is the one-ray decision), and a triangle is accepted only by
+// intersect_triangle() itself, for that ray with that ray's range, in leaf order; the lanes only
+// pick, with the same first steps of that test, which rays are worth the call. What may differ
+// is the order in which leaves are reached, and so which of two triangles hit at exactly the
+// same t (an edge they share) is kept, as with the wide hierarchy (21_wide_bvh.h);
+// tests/tracer/test_mesh_packets.py renders every mesh scene both ways.
+//
+// It serves the aov integrator's primary rays in scenes of meshes only (mesh_packets_serve());
+// other scenes, and packets=False, trace one ray at a time (19_aov.h).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+
+#include <immintrin.h>
+
+#include "01_vec3.h"
+#include "02_ray.h"
+#include "03_camera.h"
+#include "04_hit.h"
+#include "09_scene.h"
+#include "12_packet.h"
+#include "14_box.h"
+#include "15_triangle.h"
+#include "16_mesh.h"
+#include "19_aov.h"
+#include "constants.h"
+#include "power.h"
+
+namespace rt {
+
+// Whether every object is a mesh with a hierarchy and the packets flag is on: the scenes this
+// file serves.
+inline bool mesh_packets_serve(const Scene &scene) {
+    if (!scene.spheres.empty() || !scene.planes.empty() || scene.objects.empty()) return false;
+    for (const auto &object : scene.objects) {
+        const auto *mesh = dynamic_cast<const Mesh *>(object.get());
+        if (mesh == nullptr || !mesh->packets || mesh->acceleration != Acceleration::bvh ||
+            mesh->nodes.empty())
+            return false;
+    }
+    return true;
+}
+
+// a b + c rounded once, per lane (as std::fma): one instruction where the machine has FMA.
+inline Lanes fma(Lanes a, Lanes b, Lanes c) {
+#if defined(__AVX512F__)
+    static_assert(sizeof(Lanes) == sizeof(__m512d));
+    return bit_cast<Lanes>(_mm512_fmadd_pd(bit_cast<__m512d>(a), bit_cast<__m512d>(b),
+                                           bit_cast<__m512d>(c)));
+#else
+    Lanes r;
+    for (int k = 0; k < rays_per_packet; ++k) r[k] = std::fma(a[k], b[k], c[k]);
+    return r;
+#endif
+}
+
+// 15_triangle.h difference_of_products(), per lane.
+inline Lanes difference_of_products(Lanes a, Lanes b, Lanes c, Lanes d) {
+    Lanes cd = c * d;
+    Lanes error = fma(-c, d, cd);
+    return fma(a, b, -cd) + error;
+}
+
+// The packet's rays as the box and triangle tests need them (SlabRay and WatertightRay per
+// lane), and each ray's own WatertightRay for the exact test.
+struct MeshRaysL {
+    Vec3L o, inv_d, inv_d_far;
+    Mask near_x, near_y, near_z; // as SlabRay::near_x, ... (true: the max plane is near)
+    int near[3]; // per axis: 1 (every lane's max plane is near), 0 (every lane's min), -1 mixed
+    Vec3L d;
+    bool shared_axes; // every lane's WatertightRay has the same kx, ky, kz
+    Lanes Sx, Sy, Sz;
+    int kx, ky, kz;
+    WatertightRay each[rays_per_packet]; // where the axes are not shared
+
+    // Lane k's WatertightRay, as WatertightRay(ray) makes it.
+    WatertightRay lane(int k) const {
+        if (!shared_axes) return each[k];
+        WatertightRay w;
+        w.o = {o.x[k], o.y[k], o.z[k]}, w.d = {d.x[k], d.y[k], d.z[k]};
+        w.kx = kx, w.ky = ky, w.kz = kz;
+        w.Sx = Sx[k], w.Sy = Sy[k], w.Sz = Sz[k];
+        return w;
+    }
+};
+
+// SlabRay's and WatertightRay's set-up for every lane at once: the same divisions and
+// comparisons, one vector instruction each (a ray's six divisions were a tenth of its search).
+inline MeshRaysL mesh_rays(const RayL &ray) {
+    MeshRaysL r;
+    r.o = ray.o;
+    r.inv_d = {1 / ray.d.x, 1 / ray.d.y, 1 / ray.d.z}; // 14_box.h reciprocal()
+    r.inv_d_far = r.inv_d * splat(1 + 2 * gamma(3));
+    r.near_x = r.inv_d.x < 0, r.near_y = r.inv_d.y < 0, r.near_z = r.inv_d.z < 0;
+    const Mask *nears[3] = {&r.near_x, &r.near_y, &r.near_z};
+    for (int axis = 0; axis < 3; ++axis) {
+        const unsigned bits = lane_bits(*nears[axis]);
+        r.near[axis] = bits == (1u << rays_per_packet) - 1 ? 1 : bits == 0 ? 0 : -1;
+    }
+    // WatertightRay: the axis of d's largest component becomes z.
+    const Vec3L a = abs(ray.d);
+    const Mask x_biggest = (a.x > a.y) & (a.x > a.z), y_biggest = ~(a.x > a.y) & (a.y > a.z);
+    const Mask z_biggest = ~x_biggest & ~y_biggest;
+    const unsigned all = (1u << rays_per_packet) - 1;
+    const unsigned zx = lane_bits(x_biggest), zy = lane_bits(y_biggest), zz = lane_bits(z_biggest);
+    r.shared_axes = zx == all || zy == all || zz == all;
+    r.d = ray.d;
+    if (!r.shared_axes) { // each lane its own axes, one lane at a time
+        for (int k = 0; k < rays_per_packet; ++k)
+            r.each[k] = WatertightRay(Ray{{ray.o.x[k], ray.o.y[k], ray.o.z[k]},
+                                          {ray.d.x[k], ray.d.y[k], ray.d.z[k]}});
+        return r;
+    }
+    r.kz = zx == all ? 0 : zy == all ? 1 : 2;
+    r.kx = (r.kz + 1) % 3;
+    r.ky = (r.kx + 1) % 3;
+    const Lanes *d[3] = {&ray.d.x, &ray.d.y, &ray.d.z};
+    r.Sx = -*d[r.kx] / *d[r.kz];
+    r.Sy = -*d[r.ky] / *d[r.kz];
+    r.Sz = 1 / *d[r.kz];
+    return r;
+}
+
+// 14_box.h slab_test(), per lane: the same operations in the same order (the near plane chosen
+// per lane by the sign of its 1/d, as planes[r.near_x] chooses it).
+inline Mask slab_test(const AABB &box, const MeshRaysL &r, Lanes min, Lanes max, Lanes &t_near) {
+    // BEGIN SOLUTION L09
+    // PROMPT: A copy, lane by lane, of slab_test() for a packet of rays.
+    const Vec3 *planes = &box.min; // planes[0] = min, planes[1] = max
+    // Each lane's near and far plane per axis: one value for all lanes where they agree (rays
+    // through neighbouring pixels nearly always do), else chosen lane by lane.
+    auto plane = [&](int axis, Mask near, bool far) {
+        if (r.near[axis] >= 0) return splat(planes[r.near[axis] ^ int(far)][axis]);
+        return far ? select(near, splat(box.min[axis]), splat(box.max[axis]))
+                   : select(near, splat(box.max[axis]), splat(box.min[axis]));
+    };
+    Lanes tx0 = (plane(0, r.near_x, false) - r.o.x) * r.inv_d.x;
+    Lanes tx1 = (plane(0, r.near_x, true) - r.o.x) * r.inv_d_far.x;
+    Lanes ty0 = (plane(1, r.near_y, false) - r.o.y) * r.inv_d.y;
+    Lanes ty1 = (plane(1, r.near_y, true) - r.o.y) * r.inv_d_far.y;
+    Lanes tz0 = (plane(2, r.near_z, false) - r.o.z) * r.inv_d.z;
+    Lanes tz1 = (plane(2, r.near_z, true) - r.o.z) * r.inv_d_far.z;
+    Lanes lo = min, hi = max;
+    lo = select(tx0 > lo, tx0, lo), hi = select(tx1 < hi, tx1, hi);
+    lo = select(ty0 > lo, ty0, lo), hi = select(ty1 < hi, ty1, hi);
+    lo = select(tz0 > lo, tz0, lo), hi = select(tz1 < hi, tz1, hi);
+    t_near = lo;
+    return lo <= hi;
+    // END SOLUTION
+}
+
+// The first steps of 15_triangle.h intersect_triangle() for one triangle and the packet's rays
+// (which share kx, ky, kz): the lanes that get past the inside test, det != 0 and the range
+// test, exactly the rays whose intersect_triangle() gets past them (the same operations in the
+// same order, lane by lane). Only those are worth the call.
+inline Mask triangle_candidates(const Vec3 *v, const MeshRaysL &r, Lanes min, Lanes max) {
+    // BEGIN SOLUTION L08
+    // PROMPT: A copy, lane by lane, of intersect_triangle()'s shear, edge functions and range
+    // PROMPT: test for a packet of rays.
+    const Vec3 &p0 = v[0], &p1 = v[1], &p2 = v[2];
+    const Lanes *o[3] = {&r.o.x, &r.o.y, &r.o.z};
+    const int kx = r.kx, ky = r.ky, kz = r.kz;
+    Lanes a_x = p0[kx] - *o[kx], a_y = p0[ky] - *o[ky], a_z = p0[kz] - *o[kz];
+    Lanes b_x = p1[kx] - *o[kx], b_y = p1[ky] - *o[ky], b_z = p1[kz] - *o[kz];
+    Lanes c_x = p2[kx] - *o[kx], c_y = p2[ky] - *o[ky], c_z = p2[kz] - *o[kz];
+    Lanes ax = a_x + r.Sx * a_z, ay = a_y + r.Sy * a_z;
+    Lanes bx = b_x + r.Sx * b_z, by = b_y + r.Sy * b_z;
+    Lanes cx = c_x + r.Sx * c_z, cy = c_y + r.Sy * c_z;
+    Lanes e0 = difference_of_products(bx, cy, by, cx);
+    Lanes e1 = difference_of_products(cx, ay, cy, ax);
+    Lanes e2 = difference_of_products(ax, by, ay, bx);
+    Mask outside = ((e0 < 0) | (e1 < 0) | (e2 < 0)) & ((e0 > 0) | (e1 > 0) | (e2 > 0));
+    Lanes det = e0 + e1 + e2;
+    Lanes az = r.Sz * a_z, bz = r.Sz * b_z, cz = r.Sz * c_z;
+    Lanes t_scaled = e0 * az + e1 * bz + e2 * cz;
+    Lanes lo = min * det, hi = max * det;
+    Mask out_negative = (det < 0) & ((t_scaled >= lo) | (t_scaled < hi));
+    Mask out_positive = (det > 0) & ((t_scaled <= lo) | (t_scaled > hi));
+    return ~(outside | (det == 0) | out_negative | out_positive);
+    // END SOLUTION
+}
+
+// Each ray's closest hit in `mesh` within (min, max] (max shrinks to it): for the lanes of
+// `active`, th[k] and triangle[k] where found[k]. Boxes and triangles are counted once per ray
+// that takes part in the test, as the one-ray search counts them.
+inline Mask mesh_closest_hits(const Mesh &mesh, const MeshRaysL &r, Mask active, Lanes min,
+                              Lanes &max, TriangleHit (&th)[rays_per_packet],
+                              int (&triangle)[rays_per_packet], RayCounts &counts) {
+    Mask found = mask_all(false);
+    struct Pending {
+        int node;
+        Mask lanes;
+        Lanes t_near;
+    } stack[Mesh::max_tree_depth + 1];
+    Lanes t_root;
+    counts.box_tests += uint64_t(count(active));
+    Mask lanes = active & slab_test(mesh.nodes[0].bounds, r, min, max, t_root);
+    if (!any(lanes)) return found;
+    int top = 0, index = 0;
+    for (;;) {
+        const BVHNode &node = mesh.nodes[size_t(index)];
+        if (node.count > 0) { // a leaf: its triangles in leaf order, each for the rays in it
+            counts.primitive_tests += uint64_t(count(lanes)) * uint64_t(node.count);
+            for (int i = node.first; i < node.first + node.count; ++i) {
+                const Vec3 *v = &mesh.leaf_vertices[3 * size_t(i)];
+                Mask maybe = r.shared_axes ? lanes & triangle_candidates(v, r, min, max) : lanes;
+                for (unsigned bits = lane_bits(maybe); bits != 0; bits &= bits - 1) {
+                    const int k = __builtin_ctz(bits);
+                    TriangleHit hit;
+                    if (intersect_triangle(v[0], v[1], v[2], r.lane(k), {min[k], max[k]}, hit)) {
+                        th[k] = hit, triangle[k] = mesh.order[size_t(i)];
+                        max[k] = hit.t;
+                        found[k] = -1;
+                    }
+                }
+            }
+        } else {
+            const int left = index + 1, right = node.first;
+            Lanes t_left, t_right;
+            counts.box_tests += 2 * uint64_t(count(lanes));
+            Mask in_left = lanes & slab_test(mesh.nodes[size_t(left)].bounds, r, min, max, t_left);
+            Mask in_right =
+                lanes & slab_test(mesh.nodes[size_t(right)].bounds, r, min, max, t_right);
+            const bool l = any(in_left), rr = any(in_right);
+            if (l && rr) { // the child the first of the rays enters first, then the other
+                const int k = __builtin_ctz(lane_bits(in_left | in_right));
+                const bool left_first = in_left[k] && (!in_right[k] || t_left[k] <= t_right[k]);
+                stack[top++] = left_first ? Pending{right, in_right, t_right}
+                                          : Pending{left, in_left, t_left};
+                index = left_first ? left : right;
+                lanes = left_first ? in_left : in_right;
+                continue;
+            }
+            if (l || rr) {
+                index = l ? left : right;
+                lanes = l ? in_left : in_right;
+                continue;
+            }
+        }
+        // Next: the nearest waiting node that some of its rays still reach before their hit.
+        for (;;) {
+            if (top == 0) return found;
+            const Pending &p = stack[--top];
+            lanes = p.lanes & (p.t_near <= max);
+            if (any(lanes)) {
+                index = p.node;
+                break;
+            }
+        }
+    }
+}
+
+// A packet's pixels: a block of packet_columns x packet_rows, lane k at column k %
+// packet_columns, row k / packet_columns. A compact block is more coherent than a row of 8: its
+// rays lie closer together, so fewer boxes are met by only some of them.
+constexpr int packet_columns = 4, packet_rows = rays_per_packet / packet_columns;
+
+// 03_camera.h primary_ray() through the centres of a block of pixels from (i0, j0), one per
+// lane: 12_packet.h primary_rays() with a row per lane (y times true_up lane by lane is the
+// same product as primary_ray()'s), each lane bit for bit the one-ray code's.
+inline RayL primary_rays_block(const Camera &cam, int i0, int j0) {
+    // BEGIN SOLUTION L01
+    // PROMPT: A copy of 03_camera.h primary_ray() for a block of pixels, one ray per lane.
+    Lanes sx, sy;
+    for (int k = 0; k < rays_per_packet; ++k)
+        sx[k] = (i0 + k % packet_columns) + 0.5, sy[k] = (j0 + k / packet_columns) + 0.5;
+    Lanes x = sx / double(cam.width) - 0.5;
+    Lanes y = 0.5 - sy / double(cam.height);
+    Vec3L d = splat(cam.forward) + splat(cam.right) * (x * cam.plane_width + cam.window_shift) +
+              splat(cam.true_up) * (y * cam.plane_height);
+    return {splat(cam.eye), normalize(d)};
+    // END SOLUTION
+}
+
+// 19_aov.h render_tile_aov() for scenes of meshes (mesh_packets_serve()), a packet of
+// neighbouring pixels of a row at a time: each pixel's channels as the one-ray code gives them.
+inline void render_tile_aov_packets(const Scene &scene, int x0, int y0, int x1, int y1,
+                                    float *out, RayCounts &counts) {
+    const Camera &cam = scene.camera;
+    for (int j0 = y0; j0 < y1; j0 += packet_rows)
+        for (int i0 = x0; i0 < x1; i0 += packet_columns) {
+            // Lanes past the tile's edge are rays through pixels beyond it, masked off.
+            Mask active = mask_all(false);
+            for (int k = 0; k < rays_per_packet; ++k)
+                if (i0 + k % packet_columns < x1 && j0 + k / packet_columns < y1) active[k] = -1;
+            counts.primary += uint64_t(count(active));
+            const MeshRaysL r = mesh_rays(primary_rays_block(cam, i0, j0));
+            Lanes max = splat(infinity);
+            const Mesh *owner[rays_per_packet] = {};
+            TriangleHit th[rays_per_packet];
+            int triangle[rays_per_packet];
+            for (const auto &object : scene.objects) { // in order, as closest_hit() asks them
+                const Mesh &mesh = static_cast<const Mesh &>(*object);
+                TriangleHit here[rays_per_packet];
+                int t[rays_per_packet];
+                Mask found = mesh_closest_hits(mesh, r, active, splat(0.0), max, here, t, counts);
+                for (unsigned bits = lane_bits(found); bits != 0; bits &= bits - 1) {
+                    const int k = __builtin_ctz(bits);
+                    owner[k] = &mesh, th[k] = here[k], triangle[k] = t[k];
+                }
+            }
+            for (unsigned bits = lane_bits(active); bits != 0; bits &= bits - 1) {
+                const int k = __builtin_ctz(bits);
+                Hit hit;
+                if (owner[k] != nullptr) owner[k]->record(th[k], triangle[k], hit);
+                store_aov(out, cam.width, i0 + k % packet_columns, j0 + k / packet_columns, hit);
+            }
+        }
+}
+
+} // namespace rt
