@@ -80,3 +80,7 @@ FAMILIES["self-intersection-curved"] = Family(
     "self-intersection-curved", "coordinate scale", tuple(10.0**e for e in range(-8, 9)),
     (1e-8, 1e8), ("cylinder", "torus"), self_intersection_curved, "self_hits",
     stiffer="both")  # fmt: skip
+
+# Self-intersection on cylinders and tori under random transforms, appended after this family
+# (imported here, after it is in FAMILIES, so that the order is fixed): study/families_placed.py.
+from study import families_placed  # noqa: E402, F401

@@ -51,7 +51,24 @@ def shape_from(obj: dict[str, Any]) -> Shape:
     if kind == "mesh":
         return Mesh(tuple(_vec(v) for v in obj["vertices"]),
                     tuple((int(f[0]), int(f[1]), int(f[2])) for f in obj["faces"]))  # fmt: skip
+    if kind in ("placed-cylinder", "placed-elliptic-cylinder", "placed-torus"):
+        return _placed_from(obj)
     raise FreezeError(f"shape.kind: {kind!r} is not a shape the study has")
+
+
+def _placed_from(obj: dict[str, Any]) -> Shape:
+    """A cylinder or torus under a transform (study/shapes.py PlacedCylinder, PlacedTorus): its
+    own coordinates' numbers and the scene language's transform, as scene_object() wrote them."""
+    from study.shapes import PlacedCylinder, PlacedTorus, Placement
+
+    tf = obj["transform"]
+    placement = Placement(_vec(tf["scale"]), _vec(tf["rotate"]["axis"]),
+                          float(tf["rotate"]["degrees"]), _vec(tf["translate"]))  # fmt: skip
+    if obj["kind"] == "placed-torus":
+        return PlacedTorus(float(obj["major_radius"]), float(obj["minor_radius"]), placement)  # type: ignore[return-value]
+    if any(float(x) != 0 for x in obj["base"]) or any(float(x) != 0 for x in obj["top"][:2]):
+        raise FreezeError(f"shape: {obj['kind']} expected base 0 and top on +z, got {obj}")
+    return PlacedCylinder(float(obj["radius"]), float(obj["top"][2]), placement)  # type: ignore[return-value]
 
 
 def freeze(failures: list[dict[str, Any]], per: int = PER) -> dict[str, list[dict[str, Any]]]:

@@ -145,6 +145,10 @@ def _textbook(dtype: type) -> Callable[[Shape, Array, Array], Traced]:
             from study.methods_scenes import TEXTBOOK
 
             return TEXTBOOK[shape.kind](shape, o_in, d_in, dtype)
+        if shape.kind in PLACED:  # under a transform: study/methods_placed.py
+            from study.methods_placed import TEXTBOOK as PLACED_TEXTBOOK
+
+            return PLACED_TEXTBOOK[shape.kind](shape, o_in, d_in, dtype)  # type: ignore[arg-type]
         if isinstance(shape, Torus):  # Suffern's quartic, Schwarze's solver: study/methods_torus.py
             return methods_torus.textbook_trace(dtype)(shape, o_in, d_in)  # type: ignore[operator]
         o, d = o_in.astype(dtype), d_in.astype(dtype)
@@ -269,6 +273,15 @@ def _mi_scene(variant: str, shape: Shape) -> object:
         mi.set_log_level(mi.LogLevel.Error)
         try:
             return mi.load_dict({"type": "scene", "c": cyl})
+        finally:
+            mi.set_log_level(level)
+    if shape.kind == "placed-cylinder":  # study/methods_placed.py
+        from study.methods_placed import mitsuba_cylinder
+
+        level = mi.log_level()
+        mi.set_log_level(mi.LogLevel.Error)
+        try:
+            return mi.load_dict({"type": "scene", "c": mitsuba_cylinder(mi, shape)})  # type: ignore[arg-type]
         finally:
             mi.set_log_level(level)
     # Triangles: an mi.Mesh filled through traverse() (Mitsuba keeps vertices in float32).
@@ -481,6 +494,9 @@ ALL = ("sphere", "plane", "triangle", "box", "mesh")
 PORTED = ALL
 ALL = (*ALL, "cylinder", "rbox")  # study/methods_scenes.py
 ALL = (*ALL, "torus", "torus-camera")  # study/methods_torus.py
+#: Cylinders and tori under a transform (study/methods_placed.py).
+PLACED = ("placed-cylinder", "placed-elliptic-cylinder", "placed-torus")
+ALL = (*ALL, *PLACED)
 
 
 def _unsupported_spawn(tr: Traced, toward: Array) -> Array:
@@ -509,7 +525,7 @@ def methods(include_mitsuba: bool = True, include_embree: bool = True) -> list[M
                 Method(
                     f"mitsuba-{variant}",
                     version,
-                    frozenset({"sphere", "triangle", "mesh", "box", "cylinder"}),
+                    frozenset({"sphere", "triangle", "mesh", "box", "cylinder", "placed-cylinder"}),
                     _mitsuba_trace(variant),
                     _mitsuba_spawn(variant),
                     _mitsuba_occluded(variant),

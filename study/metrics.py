@@ -155,6 +155,8 @@ def spawn(case: Case, method: Method) -> Result:
 #: a torus is not convex (a ray leaving it may meet it again elsewhere); the cylinder likewise
 #: (study/families_curved.py).
 TRUTH_JUDGED = ("cylinder", "torus")
+#: And the same under a transform (study/families_placed.py).
+TRUTH_JUDGED += ("placed-cylinder", "placed-elliptic-cylinder", "placed-torus")
 
 
 def _judged_by_truth(case: Case, hit: np.ndarray, o2: np.ndarray,

@@ -3,6 +3,7 @@ numbers go to every method and to the ground truth (study/truth.py), nothing els
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Any
 
@@ -212,3 +213,106 @@ class Torus:
 
 
 Shape = Sphere | Plane | Triangle | Box | Mesh | Torus
+
+
+# ------------------------------------- appended for issue 11's transformed self-intersection
+# (study/families_placed.py, study/truth_placed.py: cylinders and tori under random transforms)
+
+
+@dataclass(frozen=True)
+class Placement:
+    """The scene language's transform (tracer/scene/objects.py): scale, then rotate about
+    ``axis`` by ``degrees``, then translate."""
+
+    scale: Vec = (1.0, 1.0, 1.0)
+    axis: Vec = (0.0, 0.0, 1.0)
+    degrees: float = 0.0
+    translate: Vec = (0.0, 0.0, 0.0)
+
+    def scene_transform(self) -> dict[str, Any]:
+        return {"scale": list(self.scale),
+                "rotate": {"axis": list(self.axis), "degrees": self.degrees},
+                "translate": list(self.translate)}  # fmt: skip
+
+    def scaled(self, s: float) -> Placement:
+        """The placement followed by a scale by s: s T R S = T(s t) R (s S), exact for s a
+        power of two."""
+        return Placement(_scale(self.scale, s), self.axis, self.degrees, _scale(self.translate, s))
+
+
+@functools.lru_cache(maxsize=256)
+def _placed_matrix(shape: PlacedCylinder | PlacedTorus) -> tuple[tuple[float, ...], ...]:
+    return _core_matrix(shape.scene_object())
+
+
+def _core_matrix(obj: dict[str, Any]) -> tuple[tuple[float, ...], ...]:
+    """The 3x4 object-to-world matrix the core is given for a cylinder or torus scene object:
+    the scene read by the scene language, then tracer/scene/placement.py to_world(), as
+    tracer/render.py to_core() does (the object's own frame, then its transform)."""
+    import tracer
+    from tracer.scene.placement import to_world
+
+    scene = tracer.load_scene({
+        "camera": {"eye": [0.0, 0.0, 1.0], "look_at": [0.0, 0.0, 0.0], "up": [0.0, 1.0, 0.0],
+                   "fov_y": 30.0, "width": 1, "height": 1},
+        "materials": {"m": {"color": [1.0, 1.0, 1.0]}},
+        "objects": [obj | {"material": "m"}],
+    })  # fmt: skip
+    return tuple(tuple(float(x) for x in row) for row in to_world(scene.objects[0])[:3])
+
+
+@dataclass(frozen=True)
+class PlacedCylinder:
+    """A capped cylinder in its own coordinates (base at the origin, axis +z, ``height`` long)
+    placed in the world by ``placement``: the core's cylinder (tracer/cpp/17_cylinder.h) with
+    the matrix ``matrix()``, which the truth takes as exact. The kind says whether the cross
+    section stays a circle (equal x and y scale: Mitsuba's cylinder can take it) or not."""
+
+    radius: float
+    height: float
+    placement: Placement
+    kind_circular = "placed-cylinder"
+    kind_elliptic = "placed-elliptic-cylinder"
+
+    @property
+    def kind(self) -> str:
+        s = self.placement.scale
+        return self.kind_circular if s[0] == s[1] else self.kind_elliptic
+
+    def local(self) -> Cylinder:
+        return Cylinder((0.0, 0.0, 0.0), (0.0, 0.0, self.height), self.radius)
+
+    def scene_object(self) -> dict[str, Any]:
+        return self.local().scene_object() | {"transform": self.placement.scene_transform()}
+
+    def scaled(self, s: float) -> PlacedCylinder:
+        return PlacedCylinder(self.radius, self.height, self.placement.scaled(s))
+
+    def matrix(self) -> tuple[tuple[float, ...], ...]:
+        return _placed_matrix(self)
+
+
+@dataclass(frozen=True)
+class PlacedTorus:
+    """A ring torus in its own coordinates (centre at the origin, axis +z) placed in the world
+    by ``placement`` (tracer/cpp/18_torus.h with the matrix ``matrix()``)."""
+
+    major_radius: float
+    minor_radius: float
+    placement: Placement
+    kind = "placed-torus"
+
+    def local(self) -> Torus:
+        return Torus((0.0, 0.0, 0.0), self.major_radius, self.minor_radius)
+
+    def scene_object(self) -> dict[str, Any]:
+        return self.local().scene_object() | {"transform": self.placement.scene_transform()}
+
+    def scaled(self, s: float) -> PlacedTorus:
+        return PlacedTorus(self.major_radius, self.minor_radius, self.placement.scaled(s))
+
+    def matrix(self) -> tuple[tuple[float, ...], ...]:
+        return _placed_matrix(self)
+
+
+Placed = PlacedCylinder | PlacedTorus

@@ -536,6 +536,8 @@ def side(shape: Shape, p: npt.ArrayLike) -> int:
     triangle's plane, along its normal), -1 inside (below), 0 on it."""
     if shape.kind == "cylinder":  # study/truth_scenes.py
         return truth_scenes.cylinder_side(shape, p)  # type: ignore[arg-type]
+    if shape.kind in truth_placed.SIDE:  # transformed cylinders and tori: study/truth_placed.py
+        return truth_placed.SIDE[shape.kind](shape, p)  # type: ignore[arg-type]
     if shape.kind == "rbox":
         return truth_scenes.rbox_side(shape, p)  # type: ignore[arg-type]
     if isinstance(shape, Torus):
@@ -594,6 +596,7 @@ def within_bound(shape: Shape, p: npt.ArrayLike, err: npt.ArrayLike) -> bool:
     return len(sides) > 1 or 0 in sides
 
 
-# Issue 11's scene families (cylinders, groups of nearly touching shapes): study/truth_scenes.py.
-# Importing it adds their routes to _ROUTE1 and _ROUTE2 (it builds on the helpers above).
-from study import truth_scenes  # noqa: E402
+# Issue 11's scene families (cylinders, groups of nearly touching shapes): study/truth_scenes.py;
+# cylinders and tori under a transform: study/truth_placed.py. Importing them adds their routes
+# to _ROUTE1 and _ROUTE2 (they build on the helpers above).
+from study import truth_placed, truth_scenes  # noqa: E402

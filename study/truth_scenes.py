@@ -185,10 +185,15 @@ ROUTE2 = {"cylinder": _cylinder2, "group": _group2}
 
 def cylinder_side(cy: Cylinder, p: npt.ArrayLike) -> int:
     """+1 outside the solid cylinder, -1 inside, 0 on its surface (exact)."""
+    return cylinder_side_exact(cy, _t._v(p))
+
+
+def cylinder_side_exact(cy: Cylinder, p: Vec) -> int:
+    """cylinder_side() for a point given as exact rationals (study/truth_placed.py)."""
     base, top = _t._v(cy.base), _t._v(cy.top)
     ax = _t._sub(top, base)
     aa = _t._dot(ax, ax)
-    w = _t._sub(_t._v(p), base)
+    w = _t._sub(p, base)
     q = _t._cross(w, ax)
     rho = _t._dot(q, q) - Fraction(cy.radius) ** 2 * aa  # sign of distance^2 - r^2
     h = _t._dot(w, ax)

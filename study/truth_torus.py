@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Sequence
 from fractions import Fraction
 
 import mpmath
@@ -50,6 +51,31 @@ def quartic(tor: Torus, o: npt.ArrayLike, d: npt.ArrayLike) -> tuple[Poly, Fract
     oa, da = np.asarray(o, dtype=np.float64), np.asarray(d, dtype=np.float64)
     pos, sp = _integers([*tor.center, tor.major_radius, tor.minor_radius, *oa])
     dirs, sd = _integers(list(da))
+    return _quartic_of(pos, sp, dirs, sd)
+
+
+def _rationals(values: list[Fraction]) -> tuple[list[int], int]:
+    """Rationals as integers over one common denominator (their least common multiple): for
+    doubles the largest of their powers of two, as _integers() has it."""
+    big = 1
+    for v in values:
+        big = math.lcm(big, v.denominator)
+    return [v.numerator * (big // v.denominator) for v in values], big
+
+
+def quartic_exact(tor: Torus, o: Sequence[Fraction],
+                  d: Sequence[Fraction]) -> tuple[Poly, Fraction]:  # fmt: skip
+    """quartic() for a ray given as exact rationals (a world ray taken into a transformed
+    torus' own coordinates by the exact inverse of its matrix: study/truth_placed.py)."""
+    pos, sp = _rationals([*(Fraction(float(x)) for x in tor.center),
+                          Fraction(tor.major_radius), Fraction(tor.minor_radius), *o])  # fmt: skip
+    dirs, sd = _rationals(list(d))
+    return _quartic_of(pos, sp, dirs, sd)
+
+
+def _quartic_of(pos: list[int], sp: int, dirs: list[int], sd: int) -> tuple[Poly, Fraction]:
+    """The quartic from the centre, radii and origin as integers over sp (pos) and the direction
+    over sd (dirs)."""
     c, big_r, r, oo = pos[0:3], pos[3], pos[4], pos[5:8]
     f = [oo[k] - c[k] for k in range(3)]
     dd = dirs
@@ -178,7 +204,16 @@ def decide(tor: Torus, o: npt.ArrayLike, d: npt.ArrayLike, tmax: float = math.in
 def first_root(tor: Torus, o: npt.ArrayLike, d: npt.ArrayLike,
                tmax: float = math.inf, digits: int = 120) -> tuple[bool, object]:  # fmt: skip
     """Route 1: (hit, t as an mpmath number good to ``digits`` digits) or (False, None)."""
-    q, scale = quartic(tor, o, d)
+    return _first_root_of(*quartic(tor, o, d), tmax, digits)
+
+
+def first_root_exact(tor: Torus, o: Sequence[Fraction], d: Sequence[Fraction],
+                     tmax: float = math.inf, digits: int = 120) -> tuple[bool, object]:  # fmt: skip
+    """first_root() for a ray given as exact rationals (quartic_exact())."""
+    return _first_root_of(*quartic_exact(tor, o, d), tmax, digits)
+
+
+def _first_root_of(q: Poly, scale: Fraction, tmax: float, digits: int) -> tuple[bool, object]:
     s, seq = _square_free(q)
     top = None if tmax == math.inf else Fraction(tmax) / scale
     zero = Fraction(0)
@@ -364,6 +399,14 @@ def route2(tor: Torus, o: npt.ArrayLike, d: npt.ArrayLike, tmax: float = math.in
         c = [mpmath.mpf(float(x)) for x in tor.center]
         oo = [mpmath.mpf(float(x)) - ci for x, ci in zip(np.asarray(o), c, strict=True)]
         dd = [mpmath.mpf(float(x)) for x in np.asarray(d)]
+        return route2_mp(tor, oo, dd, tmax, digits)
+
+
+def route2_mp(tor: Torus, oo: list, dd: list, tmax: float = math.inf,
+              digits: int = 120) -> tuple[bool, object, mpmath.mpf]:  # fmt: skip
+    """route2() for a ray given in mpmath numbers, its origin relative to the centre (a world
+    ray taken into a transformed torus' coordinates in mpmath: study/truth_placed.py)."""
+    with mpmath.workdps(2 * digits):
         big_r, r = mpmath.mpf(tor.major_radius), mpmath.mpf(tor.minor_radius)
         # |p|^2 + R^2 - r^2 = g2 t^2 + g1 t + g0 and x^2 + y^2 = h2 t^2 + h1 t + h0.
         g2 = mpmath.fsum(x * x for x in dd)
@@ -461,6 +504,16 @@ def side(tor: Torus, p: npt.ArrayLike) -> int:
     pos, _ = _integers([*tor.center, tor.major_radius, tor.minor_radius, *pa])
     c, big_r, r, q = pos[0:3], pos[3], pos[4], pos[5:8]
     f = [q[k] - c[k] for k in range(3)]
+    g = f[0] ** 2 + f[1] ** 2 + f[2] ** 2 + big_r**2 - r**2
+    v = g * g - 4 * big_r**2 * (f[0] ** 2 + f[1] ** 2)
+    return (v > 0) - (v < 0)
+
+
+def side_exact(tor: Torus, p: Sequence[Fraction]) -> int:
+    """side() for a point given as exact rationals."""
+    c = [Fraction(float(x)) for x in tor.center]
+    big_r, r = Fraction(tor.major_radius), Fraction(tor.minor_radius)
+    f = [p[k] - c[k] for k in range(3)]
     g = f[0] ** 2 + f[1] ** 2 + f[2] ** 2 + big_r**2 - r**2
     v = g * g - 4 * big_r**2 * (f[0] ** 2 + f[1] ** 2)
     return (v > 0) - (v < 0)
