@@ -33,6 +33,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -251,77 +252,109 @@ struct WideBVH : MeshAccelerator {
 
     // Mesh::traverse()'s answer (see the top of this file), nearest child first.
     bool traverse(const Mesh &mesh, const Ray &ray, Interval range, TriangleHit &best,
-                  int &best_triangle, RayCounts &counts, bool any) const override {
-        if (nodes.empty()) return false;
-        const WatertightRay wr(ray);
-        const SlabRay sr(ray);
-        struct Entry {
-            int32_t child; // as WideNode::child
-            double t_near;
-        } stack[stack_size];
-        int top = 0;
-        stack[top++] = {0, range.min};
-        bool found = false;
-        uint64_t box_tests = 0, primitive_tests = 0;
+                  int &best_triangle, RayCounts &counts, bool any) const override;
+};
+
+// One ray's search of a wide hierarchy, a step (a node or a leaf) at a time, so that a batch
+// of rays can take turns (closest_mesh_hits()): while one ray waits for its next node to come
+// from memory, the others work.
+struct WideSearch {
+    struct Entry {
+        int32_t child; // as WideNode::child
+        double t_near;
+    };
+    const WideBVH &bvh;
+    const Mesh &mesh;
+    const WatertightRay wr;
+    const SlabRay sr;
+    Interval range;
+    const bool any;
+    Entry stack[WideBVH::stack_size];
+    int top = 0;
+    TriangleHit best{};
+    int best_triangle = -1;
+    bool found = false;
+    uint64_t box_tests = 0, primitive_tests = 0;
+
+    WideSearch(const WideBVH &bvh, const Mesh &mesh, const Ray &ray, Interval range, bool any)
+        : bvh(bvh), mesh(mesh), wr(ray), sr(ray), range(range), any(any) {
+        if (!bvh.nodes.empty()) stack[top++] = {0, range.min};
+    }
+
+    // One node or leaf; false when the search is over (found and best say what it found).
+    bool step() {
         while (top > 0) {
             const Entry e = stack[--top];
             if (e.t_near > range.max) continue; // a hit has come nearer meanwhile
-            if (e.child < 0) {
-                for (int b = -1 - e.child, more = 1; more; ++b) {
-                    const TriangleBlock &block = blocks[size_t(b)];
-                    more = block.more;
-                    M4 candidates = triangle_candidates(block, wr, range);
-                    for (int l = 0; l < bvh_width; ++l) {
-                        const int i = block.leaf[l];
-                        if (i < 0) break;
-                        ++primitive_tests;
-                        if (!candidates[l]) continue;
-                        // The block's own copy of leaf_vertices[3 i ...] (the same doubles):
-                        // no second cache line to wait for.
-                        Vec3 v[3];
-                        for (int k = 0; k < 3; ++k)
-                            v[k] = {block.p[k][0][l], block.p[k][1][l], block.p[k][2][l]};
-                        TriangleHit th;
-                        if (intersect_triangle(v[0], v[1], v[2], wr, range, th)) {
-                            best = th;
-                            best_triangle = mesh.order[size_t(i)];
-                            range.max = th.t;
-                            found = true;
-                            if (any) {
-                                counts.box_tests += box_tests;
-                                counts.primitive_tests += primitive_tests;
-                                return true;
-                            }
-                        }
-                    }
-                }
-                continue;
-            }
-            const WideNode &node = nodes[size_t(e.child)];
-            box_tests += uint64_t(node.children);
-            D4 t_near;
-            const M4 hit = slab_test(node, sr, range, t_near);
-            // The children hit, pushed farthest first so that the nearest is taken next.
-            Entry next[bvh_width];
-            int n = 0;
-            for (int c = 0; c < node.children; ++c) {
-                if (!hit[c]) continue;
-                Entry x{node.child[c], t_near[c]};
-                // Ask memory for every child hit now, so that their cache misses overlap
-                // (the search is bound by memory, not arithmetic).
-                if (x.child >= 0) __builtin_prefetch(&nodes[size_t(x.child)]);
-                else __builtin_prefetch(&blocks[size_t(-1 - x.child)]);
-                int k = n++;
-                for (; k > 0 && next[k - 1].t_near < x.t_near; --k) next[k] = next[k - 1];
-                next[k] = x;
-            }
-            for (int k = 0; k < n; ++k) stack[top++] = next[k];
+            if (e.child < 0) return leaf(-1 - e.child);
+            node(e.child);
+            return top > 0;
         }
-        counts.box_tests += box_tests;
-        counts.primitive_tests += primitive_tests;
-        return found;
+        return false;
+    }
+
+    bool leaf(int first_block) {
+        for (int b = first_block, more = 1; more; ++b) {
+            const TriangleBlock &block = bvh.blocks[size_t(b)];
+            more = block.more;
+            M4 candidates = triangle_candidates(block, wr, range);
+            for (int l = 0; l < bvh_width; ++l) {
+                const int i = block.leaf[l];
+                if (i < 0) break;
+                ++primitive_tests;
+                if (!candidates[l]) continue;
+                // The block's own copy of leaf_vertices[3 i ...] (the same doubles): no second
+                // cache line to wait for.
+                Vec3 v[3];
+                for (int k = 0; k < 3; ++k)
+                    v[k] = {block.p[k][0][l], block.p[k][1][l], block.p[k][2][l]};
+                TriangleHit th;
+                if (intersect_triangle(v[0], v[1], v[2], wr, range, th)) {
+                    best = th;
+                    best_triangle = mesh.order[size_t(i)];
+                    range.max = th.t;
+                    found = true;
+                    if (any) return top = 0, false;
+                }
+            }
+        }
+        return top > 0;
+    }
+
+    void node(int index) {
+        const WideNode &node = bvh.nodes[size_t(index)];
+        box_tests += uint64_t(node.children);
+        D4 t_near;
+        const M4 hit = slab_test(node, sr, range, t_near);
+        // The children hit, pushed farthest first so that the nearest is taken next.
+        Entry next[bvh_width];
+        int n = 0;
+        for (int c = 0; c < node.children; ++c) {
+            if (!hit[c]) continue;
+            Entry x{node.child[c], t_near[c]};
+            // Ask memory for every child hit now, so that their cache misses overlap (the
+            // search is bound by memory, not arithmetic).
+            if (x.child >= 0) __builtin_prefetch(&bvh.nodes[size_t(x.child)]);
+            else __builtin_prefetch(&bvh.blocks[size_t(-1 - x.child)]);
+            int k = n++;
+            for (; k > 0 && next[k - 1].t_near < x.t_near; --k) next[k] = next[k - 1];
+            next[k] = x;
+        }
+        for (int k = 0; k < n; ++k) stack[top++] = next[k];
     }
 };
+
+inline bool WideBVH::traverse(const Mesh &mesh, const Ray &ray, Interval range, TriangleHit &best,
+                              int &best_triangle, RayCounts &counts, bool any) const {
+    WideSearch search(*this, mesh, ray, range, any);
+    while (search.step()) {
+    }
+    counts.box_tests += search.box_tests;
+    counts.primitive_tests += search.primitive_tests;
+    if (!search.found) return false;
+    best = search.best, best_triangle = search.best_triangle;
+    return true;
+}
 
 // The wide hierarchy of a mesh built with Acceleration::bvh (none for the other kinds, which
 // exist to count what a hierarchy saves and keep the lecture's search).
@@ -352,12 +385,59 @@ inline void closest_mesh_hits(const Scene &scene, const double *origins,
         if (const auto *mesh = dynamic_cast<const Mesh *>(object.get())) meshes.push_back(mesh);
     constexpr size_t chunk = 4096; // rays per turn: one atomic increment per 4096 rays
     std::atomic<size_t> next{0};
+    // One mesh with a wide hierarchy: in_flight rays take turns, a step each (WideSearch), so
+    // that each ray's next node, asked for when it was pushed, has come from memory by the
+    // time its turn comes again. Incoherent rays wait on memory: 12 wide nodes and 8 triangles
+    // a ray on the bunny took 1.2 us, a main-memory latency for each. Each search is the one
+    // traverse() makes, so the answers are the same.
+    const WideBVH *wide =
+        meshes.size() == 1 && meshes[0]->packets
+            ? dynamic_cast<const WideBVH *>(meshes[0]->accelerator.get())
+            : nullptr;
+    auto ray_at = [&](size_t i) {
+        const double *o = origins + 3 * i, *d = directions + 3 * i;
+        return Ray{{o[0], o[1], o[2]}, {d[0], d[1], d[2]}};
+    };
+    auto interleaved = [&](size_t start, size_t end, RayCounts &counts) {
+        constexpr int in_flight = 8;
+        const Mesh &mesh = *meshes[0];
+        std::optional<WideSearch> slot[in_flight];
+        size_t ray_of[in_flight] = {}, i = start;
+        int live = 0;
+        auto begin = [&](int k) {
+            if (i >= end) return;
+            slot[k].emplace(*wide, mesh, ray_at(i), Interval{0, infinity}, false);
+            ray_of[k] = i++;
+            ++live;
+        };
+        for (int k = 0; k < in_flight; ++k) begin(k);
+        while (live > 0)
+            for (int k = 0; k < in_flight; ++k) {
+                if (!slot[k] || slot[k]->step()) continue;
+                const WideSearch &done = *slot[k];
+                const size_t r = ray_of[k];
+                const int t = done.best_triangle;
+                t_out[r] = done.found ? done.best.t : infinity;
+                object_out[r] = !done.found ? -1
+                                : mesh.triangle_object.empty() ? mesh.object
+                                                               : mesh.triangle_object[size_t(t)];
+                triangle_out[r] = done.found ? t : -1;
+                counts.box_tests += done.box_tests;
+                counts.primitive_tests += done.primitive_tests;
+                slot[k].reset();
+                --live;
+                begin(k);
+            }
+    };
     auto work = [&] {
         RayCounts counts;
         for (size_t start; (start = next.fetch_add(chunk)) < n;) {
+            if (wide != nullptr) {
+                interleaved(start, std::min(n, start + chunk), counts);
+                continue;
+            }
             for (size_t i = start; i < std::min(n, start + chunk); ++i) {
-                const double *o = origins + 3 * i, *d = directions + 3 * i;
-                const Ray ray{{o[0], o[1], o[2]}, {d[0], d[1], d[2]}};
+                const Ray ray = ray_at(i);
                 Interval range{0, infinity};
                 int object = -1, triangle = -1;
                 for (const Mesh *mesh : meshes) {
