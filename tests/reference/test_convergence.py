@@ -42,8 +42,9 @@ def test_mitsuba_timings_include_no_compilation():
 
 
 def test_each_mitsuba_row_says_how_many_samples_it_drew():
-    rows = convergence(width=16, height=16, sweep=(8,), reference_spp=64,
+    rows = convergence(width=16, height=16, sweep=(8,), reference_spp=64, repeats=2,
                        renderers=("rtlab", "mitsuba-llvm", "mitsuba-llvm-stratified"))  # fmt: skip
     rendered = {r["renderer"]: r["spp_rendered"] for r in rows}
     assert rendered == {"rtlab": 8, "mitsuba-llvm": 8, "mitsuba-llvm-stratified": 9}
     assert all(r["spp"] == 8 and r["seconds"] > 0 and r["value"] > 0 for r in rows)
+    assert all(r["repeats"] == 2 for r in rows)  # one row per renderer, the faster render's time
