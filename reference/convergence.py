@@ -10,6 +10,7 @@ reach a given error: their ratio is the speed comparison that matters for Monte 
 
 from __future__ import annotations
 
+import math
 import os
 import time
 from pathlib import Path
@@ -70,6 +71,8 @@ def _mitsuba_timer(scene: Scene, variant: str, sampler: str | None = None) -> An
 
     def run(spp: int, seed: int) -> tuple[np.ndarray, float, int]:
         cm.use_variant(variant)
+        if sampler == "stratified":  # the smallest square grid of strata, as Mitsuba rounds
+            spp = (math.isqrt(spp - 1) + 1) ** 2
         if spp not in warm:  # compile the kernels; not part of any timing
             # np.array() as below: the image's last kernel (the film's development) runs only
             # when the image is read, and must be compiled here too.
@@ -78,7 +81,9 @@ def _mitsuba_timer(scene: Scene, variant: str, sampler: str | None = None) -> An
         start = time.perf_counter()
         image = np.array(mi.render(mi_scene, spp=spp, seed=seed), dtype=np.float32)[..., :3]
         seconds = time.perf_counter() - start
-        return image, seconds, int(mi_scene.sensors()[0].sampler().sample_count())
+        drawn = int(mi_scene.sensors()[0].sampler().sample_count())
+        assert drawn == spp, f"Mitsuba drew {drawn} samples per pixel, asked {spp}"
+        return image, seconds, drawn
 
     return run
 
