@@ -414,13 +414,13 @@ struct SceneQueries {
 //
 // A ray of the Cornell box meets the room's mesh, the light's mesh and two boxes; the lecture's
 // closest_hit() asks each in turn, and each builds its own per-ray set-up (a box transforms the
-// ray and takes three reciprocals; a mesh takes four divisions before its first box test). Here
+// ray and takes three reciprocals; a mesh takes six divisions before its first box test). Here
 // every ray takes its slab set-up (SlabRay, 14_box.h) once, and an object whose box in world
 // coordinates the ray misses within the current range is skipped: the test a top-level
-// hierarchy makes (pbrt-v4 7.3, "Bounding Volume Hierarchies", its instances). Skipping is exact
-// only if an object the ray could hit is never skipped; why it is not, per kind of object, is
-// argued at WorldBounds::around(). The answers are then the lecture's, bit for bit (what
-// tests/tracer/test_path.py checks): the same objects, in the same order, give the same hits.
+// hierarchy makes over its objects (pbrt-v4 7.3, "Bounding Volume Hierarchies"). Skipping is
+// exact only if an object the ray could hit is never skipped; why it is not, per kind of
+// object, is argued at WorldBounds::around(). The answers are then the lecture's, bit for bit
+// (tests/tracer/test_path.py): the same objects, in the same order, give the same hits.
 
 inline double max_abs(const Vec3 &v) {
     return std::max(std::fabs(v.x), std::max(std::fabs(v.y), std::fabs(v.z)));
