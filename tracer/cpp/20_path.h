@@ -38,6 +38,7 @@
 #include "09_scene.h"
 #include "10_classic.h"
 #include "11_render.h"
+#include "13_transform.h"
 #include "14_box.h"
 #include "16_mesh.h"
 #include "constants.h"
