@@ -277,6 +277,11 @@ def test_random_valid_scenes_render_finite_images(data):
         one_ray = tracer.render_with_stats(scene, threads=1, progress=False, packets=False)
         assert np.array_equal(one_ray.image, result.image)
         assert one_ray.rays == result.rays
+    if scene.render.integrator == "path":  # the culled scene queries trace the same paths
+        plain = tracer.render_with_stats(scene, threads=1, progress=False, packets=False)
+        assert np.array_equal(plain.image, result.image)
+        for kind in ("primary", "secondary", "shadow"):  # box and primitive tests differ
+            assert plain.rays[kind] == result.rays[kind], kind
 
 
 def test_the_named_degenerate_cases_render():
