@@ -4,7 +4,9 @@ Every row has ``case``, ``renderer``, ``threads``, ``metric``, ``value`` and ``u
 ``repeats`` and ``machine``. Times are the best of several runs in one process, interleaved by
 renderer, so that ratios taken within one run hold even when the shared machine's absolute
 speed drifts. Renderers: ``rtlab``, ``povray`` (its own Trace Time of one pass, start-up
-excluded), ``mitsuba-llvm`` (a warm render, JIT compile excluded), ``mitsuba-scalar``.
+excluded), ``mitsuba-llvm`` (a warm render, JIT compile excluded), ``mitsuba-scalar``, and in
+the convergence suite ``mitsuba-llvm-stratified`` (Mitsuba's stratified sampler, the strata
+rtlab draws: reference/convergence.py MITSUBA).
 """
 
 from __future__ import annotations
@@ -254,7 +256,12 @@ def suite_convergence(out_dir: str | os.PathLike[str] = "out") -> list[dict[str,
     from reference.convergence import convergence, convergence_classic, plot, summary
 
     rows = []
-    for name, made in (("cornell", convergence()), ("ex25", convergence_classic())):
+    cases = (("cornell", convergence()),
+             ("cornell-128", convergence(width=128, height=128,
+                                         renderers=("rtlab", "mitsuba-llvm",
+                                                    "mitsuba-llvm-stratified"))),
+             ("ex25", convergence_classic()))  # fmt: skip
+    for name, made in cases:
         path = Path(out_dir) / f"convergence-{name}.png"
         plot(made, path)
         print(summary(made))

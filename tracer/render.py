@@ -132,7 +132,8 @@ class RenderResult:
     #: what traced the image: "classic" (one ray at a time), "classic_packets" (a packet of rays
     #: at a time: scenes of spheres and planes only, so packets=True falls back to "classic"
     #: elsewhere), "aov", "aov_packets" (packets of primary rays: scenes of meshes only, with
-    #: packets=True) or "path".
+    #: packets=True), "path" (the lecture's scene queries, packets=False) or "path_culled"
+    #: (objects culled by their world bounds, packets=True).
     integrator: str = "classic"
 
 
@@ -327,11 +328,12 @@ def _check_threads(threads: int | None) -> int:
 def core_integrator(scene: Scene, packets: bool = True) -> _core.Integrator:
     """The core's integrator for the scene's ``render.integrator``; ``packets`` chooses between
     the classic model's two tracers (packets serve scenes of spheres and planes only; the core
-    falls back to one ray at a time elsewhere and reports it)."""
+    falls back to one ray at a time elsewhere and reports it), and between the path tracer's
+    scene queries (the lecture's, or objects culled by their world bounds: the same image)."""
     if scene.render.integrator == "aov":
         return _core.Integrator.aov
-    if scene.render.integrator == "path":
-        return _core.Integrator.path
+    if scene.render.integrator == "path":  # the same image either way (tests/tracer/test_path.py)
+        return _core.Integrator.path_culled if packets else _core.Integrator.path
     return _core.Integrator.classic_packets if packets else _core.Integrator.classic
 
 

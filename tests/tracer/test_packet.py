@@ -102,6 +102,9 @@ def test_other_integrators_report_themselves(integrator):
         render={"integrator": integrator},
         objects=[sphere([0.0, 0.0, 0.0], 0.5)],
     )
-    for packets in (False, True):  # packets concern the classic model only
+    # Packets concern the classic model; the path tracer's packets=True is its culled scene
+    # queries (the same image: tests/tracer/test_path.py).
+    fast = {"aov": "aov", "path": "path_culled"}[integrator]
+    for packets, expected in ((False, integrator), (True, fast)):
         result = tracer.render_with_stats(tracer.load_scene(data), threads=1, packets=packets)
-        assert result.integrator == integrator
+        assert result.integrator == expected

@@ -170,6 +170,14 @@ struct Box : Object {
         transform.place(*this, t, p, e, N, hit);
         return true;
     }
+
+    // A shadow ray needs only whether the box lies within range (slide "How is it Done?": "is
+    // anything in the way"): the same test as hit(), without the hit record (the point, its
+    // error bound, the normal taken back to the world), so the same answer.
+    bool blocks(const Ray &world_ray, const Interval &range, RayCounts &counts) const override {
+        ++counts.primitive_tests;
+        return box_crossing(slab_interval(box, transform.to_object(world_ray)), range).found;
+    }
 };
 
 } // namespace rt

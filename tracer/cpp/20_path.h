@@ -38,6 +38,8 @@
 #include "09_scene.h"
 #include "10_classic.h"
 #include "11_render.h"
+#include "13_transform.h"
+#include "14_box.h"
 #include "16_mesh.h"
 #include "constants.h"
 
@@ -215,10 +217,14 @@ inline MISWeights mis_weights(double pdf_light, double pdf_bsdf) {
 struct AreaLight {
     const Sphere *sphere = nullptr;
     const Mesh *mesh = nullptr;
-    std::vector<double> cdf; // mesh: cumulative triangle areas
+    std::vector<double> cdf;   // mesh: cumulative triangle areas
+    std::vector<Vec3> normals; // mesh: each triangle's unit normal, once (not per sample)
     double area = 0;
     Color emission;
     int object = -1;
+    // Constants of every sample, divided once (PathContext): 1 / area, and the density per
+    // unit area with which next-event estimation picks a point of this light, pick / area.
+    double pdf_area = 0, pick_per_area = 0;
 };
 
 // A point on an area light, chosen uniformly by area.
@@ -246,9 +252,9 @@ inline LightPoint sample_area_light(const AreaLight &light, double u0, double u1
         double su = std::sqrt(u1), b0 = 1 - su, b1 = u2 * su, b2 = 1 - b0 - b1;
         lp.p = b0 * a + b1 * b + b2 * c;
         lp.p_error = gamma(7) * (abs(b0 * a) + abs(b1 * b) + abs(b2 * c));
-        lp.Ng = normalize(cross(b - a, c - a));
+        lp.Ng = light.normals[t];
     }
-    lp.pdf_area = 1 / light.area;
+    lp.pdf_area = light.pdf_area; // 1 / light.area
     return lp;
 }
 
@@ -301,6 +307,8 @@ struct PathContext {
     std::vector<int> area_light_of_object; // object index -> area light index, or -1
     bool environment;                      // a non-black background: a light to sample
     int n_sampled; // area lights + the environment: one of them is sampled per vertex
+    double pick = 0; // 1 / n_sampled: the chance of each
+    std::vector<BSDF> bsdfs; // each material's lobes (BSDF's constructor), for any normal
 
     explicit PathContext(const Scene &s) : scene(s), environment(!is_black(s.settings.background)) {
         int n_objects = 0;
@@ -334,6 +342,7 @@ struct PathContext {
                      c = mesh->vertices[size_t(tri[2])];
                 acc += 0.5 * length(cross(b - a, c - a));
                 l.cdf.push_back(acc);
+                l.normals.push_back(normalize(cross(b - a, c - a)));
             }
             l.area = acc;
             l.emission = m.emission;
@@ -341,6 +350,15 @@ struct PathContext {
             add(l);
         }
         n_sampled = int(area_lights.size()) + (environment ? 1 : 0);
+        pick = 1.0 / n_sampled;
+        for (AreaLight &l : area_lights) l.pdf_area = 1 / l.area, l.pick_per_area = pick / l.area;
+        for (const Material &m : s.materials) bsdfs.emplace_back(m, Vec3{0, 0, 1});
+    }
+    // The scattering of material `material` at a point whose normal (facing the ray) is N.
+    BSDF bsdf(int material, const Vec3 &N) const {
+        BSDF b = bsdfs[size_t(material)];
+        b.N = N;
+        return b;
     }
     // A light whose area is 0 (a sphere of radius 1e-300), below 1e-308 (so that 1 / area
     // overflows) or infinite (radius 1e200) has no finite density 1 / area to sample its
@@ -357,7 +375,7 @@ struct PathContext {
         Vec3 v = y - x;
         double d2 = dot(v, v), cos_l = std::fabs(dot(Ng, v)) / std::sqrt(d2);
         if (cos_l == 0) return 0;
-        return (1.0 / n_sampled) / area_lights[size_t(index)].area * d2 / cos_l;
+        return area_lights[size_t(index)].pick_per_area * d2 / cos_l; // (1 / n) / area ...
     }
 };
 
@@ -382,8 +400,208 @@ inline bool russian_roulette(Color &beta, double u) {
     // END SOLUTION
 }
 
-// One path from the camera: the radiance it carries back along `ray`.
-inline Color trace_path(const PathContext &ctx, Ray ray, Rng &rng, RayCounts &counts) {
+// The two questions a path asks the scene (slide "How is it Done?"), as the lecture's code asks
+// them: closest_hit() (09_scene.h) and in_shadow() (10_classic.h), every object tested in turn.
+// The student's build renders with these (packets=False).
+struct SceneQueries {
+    const Scene &scene;
+    Hit closest(const Ray &ray, RayCounts &counts) const { return closest_hit(scene, ray, counts); }
+    bool blocked(const ShadowRay &shadow, RayCounts &counts) const {
+        return in_shadow(scene, shadow, counts);
+    }
+};
+
+// -- Speed beside the lesson code (packets=True): the same two answers, fewer tests -------------
+//
+// A ray of the Cornell box meets the room's mesh, the light's mesh and two boxes; the lecture's
+// closest_hit() asks each in turn, and each builds its own per-ray set-up (a box transforms the
+// ray and takes three reciprocals; a mesh takes six divisions before its first box test). Here
+// every ray takes its slab set-up (SlabRay, 14_box.h) once, and an object whose box in world
+// coordinates the ray misses within the current range is skipped: the test a top-level
+// hierarchy makes over its objects (pbrt-v4 7.3, "Bounding Volume Hierarchies"). Skipping is
+// exact only if an object the ray could hit is never skipped; why it is not, per kind of
+// object, is argued at WorldBounds::around(). The answers are then the lecture's, bit for bit
+// (tests/tracer/test_path.py): the same objects, in the same order, give the same hits.
+
+inline double max_abs(const Vec3 &v) {
+    return std::max(std::fabs(v.x), std::max(std::fabs(v.y), std::fabs(v.z)));
+}
+
+// An object's box in world coordinates, and the margin by which a ray must miss it to be
+// skipped: margin = absolute + per_reach |o| (|o| the largest coordinate of the ray's origin).
+struct WorldBounds {
+    AABB box;
+    double absolute = 0, per_reach = 0;
+
+    // A mesh: the root of its hierarchy, which is already in world coordinates, with no margin:
+    // Mesh::traverse() begins with slab_test() of this box, this ray (the same SlabRay, made
+    // from the same ray) and this range, so a ray skipped here is one it would reject at once.
+    static WorldBounds around(const Mesh &mesh) {
+        WorldBounds b;
+        if (!mesh.nodes.empty()) b.box = mesh.nodes[0].bounds;
+        return b;
+    }
+
+    // A box placed by a transform p -> A p + b: the hull of its eight corners placed in the
+    // world, widened by a bound on how far outside the placed box a hit that Box::hit() accepts
+    // can lie. Box::hit() tests o'' = inv o + c, d'' = inv d (inv ~ A^-1 and c ~ -inv b as
+    // Transform::from_matrix() computed them), rounded by at most e1 = gamma(4) (|inv| |o| +
+    // |c|) and e2 = gamma(3) |inv| |d| (sums of four products, Higham ch. 3), and its slab t
+    // carry a relative error of gamma(3) (a difference, a reciprocal, a product): at an accepted
+    // t the computed ray is within gamma(3) t |d''| of a point q of the box. Then (infinity
+    // norms, rho = ||I - A inv||, taken from the computed product plus its own rounding)
+    //   o + t d - (A q + b) = (I - A inv)(o + t d - b) - A (c + inv b) - A (e1 + t e2) + A (...)
+    // is at most rho (|o| + t|d| + |b|) + ||A|| (gamma(3) ||inv|| |b| + e1 + 2 gamma(4) ||inv||
+    // t|d|), and t|d| <= |o| + R at a point near the box (R its largest placed coordinate). The
+    // world slab test's own near t may come out a relative gamma(3) late: gamma(3) (|o| + R)
+    // more. The sum is absolute + per_reach |o|; both are taken 16 times over (a margin near
+    // 1e-14 of the scene's size skips the same rays; the factor covers second-order terms).
+    static WorldBounds around(const Box &box) {
+        const Transform &T = box.transform;
+        WorldBounds b;
+        double R = 0;
+        for (int k = 0; k < 8; ++k) {
+            Vec3 corner{k & 1 ? box.box.max.x : box.box.min.x,
+                        k & 2 ? box.box.max.y : box.box.min.y,
+                        k & 4 ? box.box.max.z : box.box.min.z};
+            Vec3 p = T.point(corner);
+            b.box.extend(p);
+            R = std::max(R, max_abs(p));
+        }
+        double norm_A = 0, norm_inv = 0, c = 0, t = 0, rho = 0, abs_product = 0;
+        for (int i = 0; i < 3; ++i) {
+            norm_A = std::max(norm_A, std::fabs(T.m[i][0]) + std::fabs(T.m[i][1]) +
+                                          std::fabs(T.m[i][2]));
+            norm_inv = std::max(norm_inv, std::fabs(T.inv[i][0]) + std::fabs(T.inv[i][1]) +
+                                              std::fabs(T.inv[i][2]));
+            c = std::max(c, std::fabs(T.inv[i][3]));
+            t = std::max(t, std::fabs(T.m[i][3]));
+            double row = 0, abs_row = 0;
+            for (int j = 0; j < 3; ++j) {
+                double e = -(i == j ? 1.0 : 0.0);
+                for (int k = 0; k < 3; ++k) {
+                    e += T.m[i][k] * T.inv[k][j];
+                    abs_row += std::fabs(T.m[i][k] * T.inv[k][j]);
+                }
+                row += std::fabs(e);
+            }
+            rho = std::max(rho, row);
+            abs_product = std::max(abs_product, abs_row);
+        }
+        rho += gamma(4) * (abs_product + 3); // the computed residual's own rounding
+        constexpr double safety = 16;
+        b.absolute = safety * (rho * (R + t) +
+                               norm_A * gamma(4) * (norm_inv * t + c + 2 * norm_inv * R) +
+                               gamma(3) * R);
+        b.per_reach = safety * (2 * rho + 3 * gamma(4) * norm_A * norm_inv + gamma(3));
+        // A margin that is not finite (a degenerate transform) skips nothing.
+        if (!(b.absolute < infinity && b.per_reach < infinity)) b = everywhere();
+        return b;
+    }
+
+    // Everything else (cylinders, tori): all of space, so nothing is skipped.
+    static WorldBounds everywhere() {
+        WorldBounds b;
+        b.box = AABB{{-infinity, -infinity, -infinity}, {infinity, infinity, infinity}};
+        return b;
+    }
+
+    bool may_hit(const SlabRay &r, double reach, const Interval &range, RayCounts &counts) const {
+        ++counts.box_tests;
+        if (absolute == 0 && per_reach == 0) {
+            double t_near;
+            return slab_test(box, r, range, t_near);
+        }
+        double m = absolute + per_reach * reach;
+        AABB wide{{box.min.x - m, box.min.y - m, box.min.z - m},
+                  {box.max.x + m, box.max.y + m, box.max.z + m}};
+        double t_near;
+        return slab_test(wide, r, range, t_near);
+    }
+};
+
+// closest_hit() and in_shadow() as the lecture writes them (09_scene.h, 10_classic.h), with each
+// object behind its world bounds. Shadow rays ask the boxes before the meshes: any blocker
+// answers, and a box is the cheaper test.
+struct CulledQueries {
+    const Scene &scene;
+    struct Bounded {
+        const Object *object;
+        WorldBounds bounds;
+    };
+    std::vector<Bounded> objects; // in the scene's order (ties between equal t go as there)
+    std::vector<Bounded> blockers; // the same, boxes first
+
+    explicit CulledQueries(const Scene &s) : scene(s) {
+        for (const auto &o : s.objects) {
+            if (const auto *mesh = dynamic_cast<const Mesh *>(o.get()))
+                objects.push_back({o.get(), WorldBounds::around(*mesh)});
+            else if (const auto *box = dynamic_cast<const Box *>(o.get()))
+                objects.push_back({o.get(), WorldBounds::around(*box)});
+            else
+                objects.push_back({o.get(), WorldBounds::everywhere()});
+        }
+        for (const Bounded &b : objects)
+            if (dynamic_cast<const Box *>(b.object)) blockers.push_back(b);
+        for (const Bounded &b : objects)
+            if (!dynamic_cast<const Box *>(b.object)) blockers.push_back(b);
+    }
+
+    Hit closest(const Ray &ray, RayCounts &counts) const {
+        Interval range{0, infinity};
+        const Sphere *sphere = nullptr;
+        const Plane *plane = nullptr;
+        counts.primitive_tests += scene.spheres.size() + scene.planes.size();
+        for (const Sphere &s : scene.spheres) {
+            double t = sphere_t(s, ray, range);
+            if (t < range.max) range.max = t, sphere = &s;
+        }
+        for (const Plane &pl : scene.planes) {
+            double t = plane_t(pl, ray);
+            if (range.surrounds(t)) range.max = t, plane = &pl, sphere = nullptr;
+        }
+        Hit hit;
+        if (!objects.empty()) {
+            const SlabRay sr(ray);
+            const double reach = max_abs(ray.o);
+            for (const Bounded &b : objects) {
+                if (!b.bounds.may_hit(sr, reach, range, counts)) continue;
+                if (b.object->hit(ray, range, hit, counts))
+                    range.max = hit.t, plane = nullptr, sphere = nullptr;
+            }
+        }
+        if (plane) plane_hit(*plane, ray, range.max, hit);
+        else if (sphere) sphere_hit(*sphere, ray, range.max, hit);
+        return hit;
+    }
+
+    bool blocked(const ShadowRay &shadow, RayCounts &counts) const {
+        ++counts.shadow;
+        const Ray &ray = shadow.ray;
+        const Interval range{0, shadow.max_t};
+        for (const Sphere &s : scene.spheres) {
+            ++counts.primitive_tests;
+            if (sphere_blocks(s, ray, range)) return true;
+        }
+        for (const Plane &pl : scene.planes) {
+            ++counts.primitive_tests;
+            if (plane_blocks(pl, ray, range)) return true;
+        }
+        if (blockers.empty()) return false;
+        const SlabRay sr(ray);
+        const double reach = max_abs(ray.o);
+        for (const Bounded &b : blockers)
+            if (b.bounds.may_hit(sr, reach, range, counts) && b.object->blocks(ray, range, counts))
+                return true;
+        return false;
+    }
+};
+
+// One path from the camera: the radiance it carries back along `ray`, the scene asked through
+// `queries` (SceneQueries: the lecture's; CulledQueries: the same answers, sooner).
+template <class Queries>
+inline Color trace_path(const PathContext &ctx, const Queries &queries, Ray ray, Rng &rng,
+                        RayCounts &counts) {
     const Scene &scene = ctx.scene;
     const Settings &s = scene.settings;
     Color L{0, 0, 0}, beta{1, 1, 1}; // the radiance so far; the path's throughput
@@ -391,7 +609,7 @@ inline Color trace_path(const PathContext &ctx, Ray ray, Rng &rng, RayCounts &co
     double prev_pdf = 0;
     Vec3 prev_x;
     for (int level = 1;; ++level) {
-        Hit hit = closest_hit(scene, ray, counts);
+        Hit hit = queries.closest(ray, counts);
         if (!hit.found()) { // the environment
             if (ctx.environment) {
                 double w = prev_delta
@@ -414,7 +632,7 @@ inline Color trace_path(const PathContext &ctx, Ray ray, Rng &rng, RayCounts &co
             L += beta * m.emission * w;
         }
         if (level >= s.max_depth) break;
-        BSDF bsdf(m, N);
+        BSDF bsdf = ctx.bsdf(hit.material, N); // BSDF(m, N), its lobes weighed once
         if (bsdf.black()) break;
 
         // Next-event estimation: every point and directional light, and one of the others.
@@ -434,7 +652,7 @@ inline Color trace_path(const PathContext &ctx, Ray ray, Rng &rng, RayCounts &co
                 double cos_i = dot(wi, N);
                 // Behind the surface, or a point light on the hit point itself (wi = 0 / 0).
                 if (!(cos_i > 0 && dot(wi, Ng) > 0)) continue;
-                if (!in_shadow(scene, shadow_ray(hit, Ng, light), counts))
+                if (!queries.blocked(shadow_ray(hit, Ng, light), counts))
                     L += beta * bsdf.eval(wo, wi) * Li * cos_i;
             }
             if (ctx.n_sampled > 0) {
@@ -443,14 +661,14 @@ inline Color trace_path(const PathContext &ctx, Ray ray, Rng &rng, RayCounts &co
                 if (k < int(ctx.area_lights.size())) {
                     const AreaLight &al = ctx.area_lights[size_t(k)];
                     LightPoint lp = sample_area_light(al, u0, u1, u2);
-                    LightConnection c = connect_to_light(hit.p, N, lp, 1.0 / ctx.n_sampled);
+                    LightConnection c = connect_to_light(hit.p, N, lp, ctx.pick);
                     const Vec3 &wi = c.wi;
                     if (c.cos_l > 0 && c.cos_i > 0 && dot(wi, Ng) > 0) {
                         // The light's point, moved off the light's own surface towards the hit
                         // (pbrt-v4 SpawnRayTo between two surfaces), so the light cannot block
                         // the ray that reaches it.
                         Vec3 target = offset_ray_origin(lp.p, lp.p_error, lp.Ng, -wi);
-                        if (!in_shadow(scene, shadow_ray_to(hit, Ng, target), counts)) {
+                        if (!queries.blocked(shadow_ray_to(hit, Ng, target), counts)) {
                             double w = mis_weights(c.pdf, bsdf.pdf(wo, wi)).light;
                             L += light_estimate(beta, bsdf.eval(wo, wi), al.emission, c.cos_i, w,
                                                 c.pdf);
@@ -460,7 +678,7 @@ inline Color trace_path(const PathContext &ctx, Ray ray, Rng &rng, RayCounts &co
                     Vec3 wi = sample_sphere(u1, u2);
                     double cos_i = dot(wi, N);
                     if (cos_i > 0 && dot(wi, Ng) > 0 &&
-                        !in_shadow(scene, shadow_ray_towards(hit, Ng, wi), counts)) {
+                        !queries.blocked(shadow_ray_towards(hit, Ng, wi), counts)) {
                         double pdf_l = (1.0 / ctx.n_sampled) / (4 * pi);
                         double w = mis_weights(pdf_l, bsdf.pdf(wo, wi)).light;
                         L += light_estimate(beta, bsdf.eval(wo, wi), s.background, cos_i, w,
@@ -488,19 +706,29 @@ inline Color trace_path(const PathContext &ctx, Ray ray, Rng &rng, RayCounts &co
 
 // A tile of pixels: spp paths per pixel through the strata of for_each_sample(), each path
 // drawing on its sample's own random stream (pixel_rng()), box-filtered.
-inline void render_tile_path(const PathContext &ctx, int x0, int y0, int x1, int y1, float *out,
-                             RayCounts &counts) {
+template <class Queries>
+inline void render_tile_path(const PathContext &ctx, const Queries &queries, int x0, int y0,
+                             int x1, int y1, float *out, RayCounts &counts) {
     const Scene &scene = ctx.scene;
     const Camera &cam = scene.camera;
+    // The tile's counts on this thread's stack, added to the thread's own at the end: the
+    // threads' counters lie side by side in memory (11_render.h), and counting every test there
+    // makes the two threads' caches pass one line back and forth.
+    RayCounts tile;
     for (int j = y0; j < y1; ++j)
         for (int i = x0; i < x1; ++i) {
             Color sum{0, 0, 0};
             for_each_sample(scene, i, j, [&](double sx, double sy, Rng &rng) {
-                ++counts.primary;
-                sum += trace_path(ctx, cam.primary_ray(sx, sy), rng, counts);
+                ++tile.primary;
+                sum += trace_path(ctx, queries, cam.primary_ray(sx, sy), rng, tile);
             });
             store_pixel(out, cam.width, i, j, sum * (1.0 / scene.settings.spp));
         }
+    counts.primary += tile.primary;
+    counts.secondary += tile.secondary;
+    counts.shadow += tile.shadow;
+    counts.box_tests += tile.box_tests;
+    counts.primitive_tests += tile.primitive_tests;
 }
 
 } // namespace rt

@@ -99,14 +99,9 @@ static rt::Transform transform_from(const std::optional<Matrix34> &m) {
 // What a render traces (Suffern's tracers, chosen per scene): the classic model one ray at a
 // time (10_classic.h, the lecture's code as written) or a packet of rays at a time
 // (12_packet.h; the same image), the arbitrary output variables (19_aov.h), or paths
-// (20_path.h).
-enum class Integrator { classic, classic_packets, aov, path, aov_packets };
+// (20_path.h), with the lecture's scene queries or with culled ones (the same image).
+enum class Integrator { classic, classic_packets, aov, path, path_culled, aov_packets };
 
-// Render with the GIL released. Every poll interval (11_render.h) the watching thread takes the
-// GIL to check for Ctrl-C and to report progress; an exception from either cancels the render
-// and is re-raised. Returns the image, the ray counts and the integrator that ran: packets
-// asked of a scene they do not serve (packets_serve(), 12_packet.h) fall back to one ray at a
-// time, and the caller learns so.
 // The image's memory. The kernel maps a fresh page only when it is first written, one fault
 // per 4 KiB page: a 1920 x 1024 aov image (5 floats a pixel, 39 MB, above the size whose freed
 // memory the C library keeps for reuse) took 9,600 faults in every render, with the render
@@ -122,6 +117,11 @@ static float *allocate_image(size_t floats) {
     return static_cast<float *>(p);
 }
 
+// Render with the GIL released. Every poll interval (11_render.h) the watching thread takes the
+// GIL to check for Ctrl-C and to report progress; an exception from either cancels the render
+// and is re-raised. Returns the image, the ray counts and the integrator that ran: packets
+// asked of a scene they do not serve (packets_serve(), 12_packet.h) fall back to one ray at a
+// time, and the caller learns so.
 static std::tuple<Image, nb::dict, Integrator> render(const rt::Scene &scene, int threads,
                                                       nb::object progress,
                                                       Integrator integrator, bool packets) {
@@ -159,6 +159,7 @@ static std::tuple<Image, nb::dict, Integrator> render(const rt::Scene &scene, in
             return true;
         };
         std::unique_ptr<rt::PathContext> context;
+        std::unique_ptr<rt::CulledQueries> culled;
         rt::TileRenderer tiles;
         switch (integrator) {
         case Integrator::classic: tiles = rt::render_tile_rays; break;
@@ -169,7 +170,15 @@ static std::tuple<Image, nb::dict, Integrator> render(const rt::Scene &scene, in
             context = std::make_unique<rt::PathContext>(scene);
             tiles = [&](const rt::Scene &, int x0, int y0, int x1, int y1, float *out,
                         rt::RayCounts &c) {
-                rt::render_tile_path(*context, x0, y0, x1, y1, out, c);
+                rt::render_tile_path(*context, rt::SceneQueries{scene}, x0, y0, x1, y1, out, c);
+            };
+            break;
+        case Integrator::path_culled:
+            context = std::make_unique<rt::PathContext>(scene);
+            culled = std::make_unique<rt::CulledQueries>(scene);
+            tiles = [&](const rt::Scene &, int x0, int y0, int x1, int y1, float *out,
+                        rt::RayCounts &c) {
+                rt::render_tile_path(*context, *culled, x0, y0, x1, y1, out, c);
             };
             break;
         }
@@ -378,6 +387,8 @@ NB_MODULE(_core, m) {
                "and planes only), else one ray at a time; the same image")
         .value("aov", Integrator::aov, "depth, object index and normal of the primary hits")
         .value("path", Integrator::path, "Monte Carlo path tracing")
+        .value("path_culled", Integrator::path_culled,
+               "Monte Carlo path tracing, objects culled by their world bounds (the same image)")
         .value("aov_packets", Integrator::aov_packets,
                "aov, packets of primary rays through the meshes' hierarchies (scenes of meshes)");
 
