@@ -48,8 +48,9 @@ MENTION = re.compile(
 )
 LESSON_ID = re.compile(r"^L\d\d$")
 # Files whose regions copy a solution written elsewhere (the packet tracer's lanes).
-# (21_wide_bvh.h: the meshes' slab and triangle tests, four lanes at a time.)
-COPIES = frozenset({"12_packet.h", "21_wide_bvh.h"})
+# (21_wide_bvh.h: the meshes' slab and triangle tests, four lanes at a time; 22_mesh_packets.h:
+# the same tests and primary rays for packets of eight rays.)
+COPIES = frozenset({"12_packet.h", "21_wide_bvh.h", "22_mesh_packets.h"})
 
 
 class MarkerError(ValueError):
