@@ -340,11 +340,32 @@ def _ratio(ours: dict[str, Any], theirs: dict[str, Any]) -> float:
     return float(ours["value"] / theirs["value"])
 
 
+def _times_to_error(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The convergence rows as one row per case and renderer: the time to reach rtlab's median
+    RMSE, fitted with the Monte Carlo slope (reference/convergence.py, as its summary prints)."""
+    import numpy as np
+
+    from reference.convergence import time_to_error
+
+    made = []
+    for case in dict.fromkeys(r["case"] for r in rows if r["metric"] == "rmse"):
+        group = [r for r in rows if r["metric"] == "rmse" and r["case"] == case]
+        ours = [r["value"] for r in group if r["renderer"] == "rtlab"]
+        if not ours:
+            continue
+        target = float(np.median(ours))
+        for renderer, seconds in time_to_error(group, target).items():
+            made.append({**group[0], "case": f"{case}, time to RMSE {target:.3g}",
+                         "renderer": renderer, "metric": "time_to_error", "value": seconds,
+                         "unit": "s"})  # fmt: skip
+    return made
+
+
 def format_markdown(rows: list[dict[str, Any]], command: str = "rtlab bench all") -> str:
     """The rows of one run as a Markdown table for the README: rtlab's figure and every other
     renderer's with rtlab's speed-up over it (below 1: rtlab is slower), then each renderer's
     gain from the second thread, the CPU and the command."""
-    rows = [r for r in rows if r["metric"] != "rmse"]
+    rows = [r for r in rows if r["metric"] != "rmse"] + _times_to_error(rows)
     others = sorted({r["renderer"] for r in rows} - {"rtlab"})
     lines = [
         "| case | threads | rtlab | " + " | ".join(others) + " |",

@@ -211,6 +211,19 @@ def test_bench_prints_each_renderers_gain_from_the_second_thread():
     assert "classic: bunny, 1 -> 2 threads: rtlab 1.90x" in lines
 
 
+def test_bench_markdown_gives_convergence_as_times_to_rtlabs_error():
+    from reference.bench import format_markdown
+
+    # RMSE = c / sqrt(seconds): rtlab's c is 1, the other's 2, so the other needs 4x the time
+    # to any error; rtlab's median RMSE is 0.75, reached by rtlab in (1 / 0.75)^2 s.
+    rows = [{"case": "box", "renderer": name, "threads": 2, "metric": "rmse", "unit": "",
+             "value": c / t**0.5, "seconds": t, "machine": "m"}
+            for name, c in (("rtlab", 1.0), ("other", 2.0)) for t in (1.0, 4.0)]  # fmt: skip
+    table = format_markdown(rows, "rtlab bench convergence").splitlines()
+    assert table[0] == "| case | threads | rtlab | other |"
+    assert table[2] == "| box, time to RMSE 0.75 | 2 | 1.778 s | 7.111 s (rtlab 4.00x) |"
+
+
 def test_bench_rows_name_the_cpu_and_its_vector_units():
     from reference.bench import cpu
 
