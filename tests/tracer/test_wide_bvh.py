@@ -106,3 +106,18 @@ def test_batch_threads_change_nothing():
         assert np.array_equal(a, b)
     with pytest.raises(ValueError, match="threads"):
         _core.closest_mesh_hits(core, origins, directions, 0, True)
+
+
+def test_the_hierarchy_built_on_two_threads_is_the_one_built_on_one():
+    """16_mesh.h builds the root's two halves side by side on a large mesh; the right half's
+    nodes, moved after the left's, must be the one-thread build's node for node."""
+    scene = load_scene(SCENES / "bunny.toml")
+    mesh = next(o for o in scene.objects if isinstance(o, Mesh))
+    vertices = np.ascontiguousarray(mesh.vertices, dtype=np.float64)
+    faces = np.ascontiguousarray(mesh.faces, dtype=np.int32)
+    assert len(faces) >= 4096  # large enough for the parallel build (parallel_build_triangles)
+    one = _core.mesh_hierarchy(vertices, faces, 1)
+    two = _core.mesh_hierarchy(vertices, faces, 2)
+    assert len(one[1]) > 10_000
+    for a, b in zip(one, two, strict=True):
+        assert a == b

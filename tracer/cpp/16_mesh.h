@@ -13,6 +13,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <thread>
 #include <vector>
 
 #include "01_vec3.h"
@@ -127,14 +128,27 @@ struct Mesh : Object {
     // inside it is the ratio of their surface areas, so a split of n triangles into (L, R)
     // costs about area(L) nL + area(R) nR (relative to area(parent)), against n for a leaf.
     // Candidate splits: 16 bins of the triangles' centres along each axis.
+    //
+    // The root's two halves are built side by side when build_threads is 2 or more and the mesh
+    // has at least parallel_build_triangles: the right half by a second thread into a list of
+    // its own, appended after the left half with its child indices moved by the left half's
+    // size, which is where the one-thread build puts it; the tree is the same node for node.
+    static constexpr int parallel_build_triangles = 4096;
+    int build_threads = 2;
+
     void build_node(int index, int first, int count, int depth, const std::vector<AABB> &boxes,
                     const std::vector<Vec3> &centres) {
+        build_node(nodes, index, first, count, depth, boxes, centres);
+    }
+
+    void build_node(std::vector<BVHNode> &out, int index, int first, int count, int depth,
+                    const std::vector<AABB> &boxes, const std::vector<Vec3> &centres) {
         AABB bounds, centre_bounds;
         for (int i = first; i < first + count; ++i) {
             bounds.extend(boxes[size_t(order[size_t(i)])]);
             centre_bounds.extend(centres[size_t(order[size_t(i)])]);
         }
-        nodes[size_t(index)].bounds = bounds;
+        out[size_t(index)].bounds = bounds;
         // 16 bins find a split within a few per cent of the best of all (Wald 2007) at a
         // fraction of the cost; leaves of at most 4 triangles, as pbrt-v4's default; a depth of
         // at most max_tree_depth keeps the traversal stack from overflowing on any input.
@@ -181,8 +195,8 @@ struct Mesh : Object {
         constexpr double traversal_cost = 1.0;
         double leaf_cost = bounds.area() * count;
         if (best_axis < 0 || leaf_cost <= best_cost + bounds.area() * traversal_cost) {
-            nodes[size_t(index)].first = first;
-            nodes[size_t(index)].count = count;
+            out[size_t(index)].first = first;
+            out[size_t(index)].count = count;
             return;
         }
         double lo = centre_bounds.min[best_axis], hi = centre_bounds.max[best_axis];
@@ -193,13 +207,31 @@ struct Mesh : Object {
                        best_bin;
             });
         int left = int(middle - order.begin()) - first;
-        int left_index = int(nodes.size());
-        nodes.emplace_back();
-        build_node(left_index, first, left, depth + 1, boxes, centres);
-        int right_index = int(nodes.size());
-        nodes.emplace_back();
-        nodes[size_t(index)].first = right_index;
-        build_node(right_index, first + left, count - left, depth + 1, boxes, centres);
+        if (depth == 0 && build_threads > 1 && count >= parallel_build_triangles) {
+            // The two halves own disjoint ranges of `order` and their own node lists.
+            std::vector<BVHNode> right_nodes(1);
+            right_nodes.reserve(2 * size_t(count - left) + 1);
+            std::thread right([&] {
+                build_node(right_nodes, 0, first + left, count - left, depth + 1, boxes, centres);
+            });
+            out.emplace_back();
+            build_node(out, index + 1, first, left, depth + 1, boxes, centres);
+            right.join();
+            const int offset = int(out.size());
+            out[size_t(index)].first = offset;
+            for (BVHNode node : right_nodes) {
+                if (node.count == 0) node.first += offset; // an inner node's second child
+                out.push_back(node);
+            }
+            return;
+        }
+        int left_index = int(out.size());
+        out.emplace_back();
+        build_node(out, left_index, first, left, depth + 1, boxes, centres);
+        int right_index = int(out.size());
+        out.emplace_back();
+        out[size_t(index)].first = right_index;
+        build_node(out, right_index, first + left, count - left, depth + 1, boxes, centres);
     }
 
     // -- tracing --------------------------------------------------------------------------

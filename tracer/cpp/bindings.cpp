@@ -510,6 +510,37 @@ NB_MODULE(_core, m) {
         "infinity and -1 on a miss; triangle is the face's index in its mesh. packets=False: "
         "the lecture's one-ray traversal, else the wide hierarchy (21_wide_bvh.h).");
     m.def(
+        "mesh_hierarchy",
+        [](nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig> vertices,
+           nb::ndarray<const int32_t, nb::shape<-1, 3>, nb::c_contig> faces, int threads) {
+            rt::Mesh mesh;
+            const size_t nv = vertices.shape(0), nf = faces.shape(0);
+            for (size_t i = 0; i < nv; ++i)
+                mesh.vertices.push_back({vertices(i, 0), vertices(i, 1), vertices(i, 2)});
+            for (size_t i = 0; i < nf; ++i) {
+                for (size_t k = 0; k < 3; ++k)
+                    if (faces(i, k) < 0 || size_t(faces(i, k)) >= nv)
+                        throw std::out_of_range("mesh face refers to a missing vertex");
+                mesh.triangles.push_back({faces(i, 0), faces(i, 1), faces(i, 2)});
+            }
+            mesh.build_threads = threads;
+            {
+                nb::gil_scoped_release release;
+                mesh.build();
+            }
+            std::vector<double> bounds;
+            std::vector<int> first, count;
+            for (const rt::BVHNode &node : mesh.nodes) {
+                for (int k = 0; k < 3; ++k) bounds.push_back(node.bounds.min[k]);
+                for (int k = 0; k < 3; ++k) bounds.push_back(node.bounds.max[k]);
+                first.push_back(node.first), count.push_back(node.count);
+            }
+            return std::make_tuple(bounds, first, count, mesh.order);
+        },
+        "vertices"_a, "faces"_a, "threads"_a = 1,
+        "The bounding volume hierarchy 16_mesh.h builds for a mesh with `threads` build "
+        "threads: (bounds: min and max corner per node, flattened; first; count; order).");
+    m.def(
         "occluded",
         [ray_at](const rt::Scene &s, Rays origins, Rays directions,
                  nb::ndarray<const double, nb::shape<-1>, nb::c_contig> tmax) {
