@@ -37,9 +37,7 @@
 #include <thread>
 #include <vector>
 
-#if defined(__FMA__)
 #include <immintrin.h>
-#endif
 
 #include "01_vec3.h"
 #include "02_ray.h"
@@ -49,6 +47,7 @@
 #include "15_triangle.h"
 #include "16_mesh.h"
 #include "constants.h"
+#include "power.h"
 
 namespace rt {
 
@@ -68,10 +67,24 @@ inline D4 fma(D4 a, D4 b, D4 c) {
 #endif
 }
 
-// 15_triangle.h's difference_of_products(), lane by lane.
-inline D4 difference_of_products(D4 a, D4 b, D4 c, D4 d) {
-    D4 cd = c * d;
-    D4 error = fma(-c, d, cd);
+// The same for the 8 lanes of a packet (power.h Lanes; 22_mesh_packets.h): AVX-512's vfmadd
+// where the machine has it.
+inline Lanes fma(Lanes a, Lanes b, Lanes c) {
+#if defined(__AVX512F__)
+    static_assert(sizeof(Lanes) == sizeof(__m512d));
+    return bit_cast<Lanes>(_mm512_fmadd_pd(bit_cast<__m512d>(a), bit_cast<__m512d>(b),
+                                           bit_cast<__m512d>(c)));
+#else
+    Lanes r;
+    for (int k = 0; k < rays_per_packet; ++k) r[k] = std::fma(a[k], b[k], c[k]);
+    return r;
+#endif
+}
+
+// 15_triangle.h's difference_of_products(), lane by lane, for 4 lanes (D4) or 8 (Lanes).
+template <class V> inline V difference_of_products(V a, V b, V c, V d) {
+    V cd = c * d;
+    V error = fma(-c, d, cd);
     return fma(a, b, -cd) + error;
 }
 
@@ -139,35 +152,43 @@ inline M4 slab_test(const WideNode &node, const SlabRay &r, const Interval &rang
     // END SOLUTION
 }
 
-// The first steps of intersect_triangle() (15_triangle.h) for a block's four triangles: true
-// for each lane that passes the inside test, det != 0 and the range test, exactly the lanes
-// whose intersect_triangle() gets past them (the same operations in the same order). Only
-// those go on to the rest of the test (the t-error guard), in intersect_triangle() itself.
-inline M4 triangle_candidates(const TriangleBlock &block, const WatertightRay &r,
-                              const Interval &range) {
+// The first steps of intersect_triangle() (15_triangle.h) lane by lane: shear, edge functions,
+// the inside test, det != 0 and the range test, the same operations in the same order, so a
+// lane is true exactly where intersect_triangle() gets past them. Only those go on to the rest
+// of the test (the t-error guard), in intersect_triangle() itself. Lanes are either four
+// triangles and one ray (below: p0, p1, p2 vectors of lanes, o and S doubles) or one triangle
+// and a packet of rays (22_mesh_packets.h: p0, p1, p2 doubles, o and S vectors of lanes).
+template <class P, class O, class S, class R>
+inline auto sheared_candidates(const P &p0, const P &p1, const P &p2, const O &o, int kx, int ky,
+                               int kz, S Sx, S Sy, S Sz, R min, R max) {
     // BEGIN SOLUTION L08
     // PROMPT: A copy, lane by lane, of intersect_triangle()'s shear, edge functions and range
-    // PROMPT: test for the four triangles of a block.
-    const int kx = r.kx, ky = r.ky, kz = r.kz;
-    const D4(&p0)[3] = block.p[0], (&p1)[3] = block.p[1], (&p2)[3] = block.p[2];
-    D4 a_x = p0[kx] - r.o[kx], a_y = p0[ky] - r.o[ky], a_z = p0[kz] - r.o[kz];
-    D4 b_x = p1[kx] - r.o[kx], b_y = p1[ky] - r.o[ky], b_z = p1[kz] - r.o[kz];
-    D4 c_x = p2[kx] - r.o[kx], c_y = p2[ky] - r.o[ky], c_z = p2[kz] - r.o[kz];
-    D4 ax = a_x + r.Sx * a_z, ay = a_y + r.Sy * a_z;
-    D4 bx = b_x + r.Sx * b_z, by = b_y + r.Sy * b_z;
-    D4 cx = c_x + r.Sx * c_z, cy = c_y + r.Sy * c_z;
-    D4 e0 = difference_of_products(bx, cy, by, cx);
-    D4 e1 = difference_of_products(cx, ay, cy, ax);
-    D4 e2 = difference_of_products(ax, by, ay, bx);
-    M4 outside = ((e0 < 0) | (e1 < 0) | (e2 < 0)) & ((e0 > 0) | (e1 > 0) | (e2 > 0));
-    D4 det = e0 + e1 + e2;
-    D4 az = r.Sz * a_z, bz = r.Sz * b_z, cz = r.Sz * c_z;
-    D4 t_scaled = e0 * az + e1 * bz + e2 * cz;
-    D4 lo = range.min * det, hi = range.max * det;
-    M4 out_negative = (det < 0) & ((t_scaled >= lo) | (t_scaled < hi));
-    M4 out_positive = (det > 0) & ((t_scaled <= lo) | (t_scaled > hi));
+    // PROMPT: test, for the four triangles of a block or for a packet of rays.
+    auto a_x = p0[kx] - o[kx], a_y = p0[ky] - o[ky], a_z = p0[kz] - o[kz];
+    auto b_x = p1[kx] - o[kx], b_y = p1[ky] - o[ky], b_z = p1[kz] - o[kz];
+    auto c_x = p2[kx] - o[kx], c_y = p2[ky] - o[ky], c_z = p2[kz] - o[kz];
+    auto ax = a_x + Sx * a_z, ay = a_y + Sy * a_z;
+    auto bx = b_x + Sx * b_z, by = b_y + Sy * b_z;
+    auto cx = c_x + Sx * c_z, cy = c_y + Sy * c_z;
+    auto e0 = difference_of_products(bx, cy, by, cx);
+    auto e1 = difference_of_products(cx, ay, cy, ax);
+    auto e2 = difference_of_products(ax, by, ay, bx);
+    auto outside = ((e0 < 0) | (e1 < 0) | (e2 < 0)) & ((e0 > 0) | (e1 > 0) | (e2 > 0));
+    auto det = e0 + e1 + e2;
+    auto az = Sz * a_z, bz = Sz * b_z, cz = Sz * c_z;
+    auto t_scaled = e0 * az + e1 * bz + e2 * cz;
+    auto lo = min * det, hi = max * det;
+    auto out_negative = (det < 0) & ((t_scaled >= lo) | (t_scaled < hi));
+    auto out_positive = (det > 0) & ((t_scaled <= lo) | (t_scaled > hi));
     return ~(outside | (det == 0) | out_negative | out_positive);
     // END SOLUTION
+}
+
+// sheared_candidates() for a block's four triangles and one ray.
+inline M4 triangle_candidates(const TriangleBlock &block, const WatertightRay &r,
+                              const Interval &range) {
+    return sheared_candidates(block.p[0], block.p[1], block.p[2], r.o, r.kx, r.ky, r.kz, r.Sx,
+                              r.Sy, r.Sz, range.min, range.max);
 }
 
 struct WideBVH : MeshAccelerator {

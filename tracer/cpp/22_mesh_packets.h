@@ -23,8 +23,6 @@
 #include <cstddef>
 #include <cstdint>
 
-#include <immintrin.h>
-
 #include "01_vec3.h"
 #include "02_ray.h"
 #include "03_camera.h"
@@ -35,6 +33,7 @@
 #include "15_triangle.h"
 #include "16_mesh.h"
 #include "19_aov.h"
+#include "21_wide_bvh.h"
 #include "constants.h"
 #include "power.h"
 
@@ -51,26 +50,6 @@ inline bool mesh_packets_serve(const Scene &scene) {
             return false;
     }
     return true;
-}
-
-// a b + c rounded once, per lane (as std::fma): one instruction where the machine has FMA.
-inline Lanes fma(Lanes a, Lanes b, Lanes c) {
-#if defined(__AVX512F__)
-    static_assert(sizeof(Lanes) == sizeof(__m512d));
-    return bit_cast<Lanes>(_mm512_fmadd_pd(bit_cast<__m512d>(a), bit_cast<__m512d>(b),
-                                           bit_cast<__m512d>(c)));
-#else
-    Lanes r;
-    for (int k = 0; k < rays_per_packet; ++k) r[k] = std::fma(a[k], b[k], c[k]);
-    return r;
-#endif
-}
-
-// 15_triangle.h difference_of_products(), per lane.
-inline Lanes difference_of_products(Lanes a, Lanes b, Lanes c, Lanes d) {
-    Lanes cd = c * d;
-    Lanes error = fma(-c, d, cd);
-    return fma(a, b, -cd) + error;
 }
 
 // The packet's rays as the box and triangle tests need them (SlabRay and WatertightRay per
@@ -161,35 +140,12 @@ inline Mask slab_test(const AABB &box, const MeshRaysL &r, Lanes min, Lanes max,
     // END SOLUTION
 }
 
-// The first steps of 15_triangle.h intersect_triangle() for one triangle and the packet's rays
-// (which share kx, ky, kz): the lanes that get past the inside test, det != 0 and the range
-// test, exactly the rays whose intersect_triangle() gets past them (the same operations in the
-// same order, lane by lane). Only those are worth the call.
+// 21_wide_bvh.h sheared_candidates() for one triangle and the packet's rays (which share kx,
+// ky, kz): the rays whose intersect_triangle() gets past its first steps. Only those are worth
+// the call.
 inline Mask triangle_candidates(const Vec3 *v, const MeshRaysL &r, Lanes min, Lanes max) {
-    // BEGIN SOLUTION L08
-    // PROMPT: A copy, lane by lane, of intersect_triangle()'s shear, edge functions and range
-    // PROMPT: test for a packet of rays.
-    const Vec3 &p0 = v[0], &p1 = v[1], &p2 = v[2];
-    const Lanes *o[3] = {&r.o.x, &r.o.y, &r.o.z};
-    const int kx = r.kx, ky = r.ky, kz = r.kz;
-    Lanes a_x = p0[kx] - *o[kx], a_y = p0[ky] - *o[ky], a_z = p0[kz] - *o[kz];
-    Lanes b_x = p1[kx] - *o[kx], b_y = p1[ky] - *o[ky], b_z = p1[kz] - *o[kz];
-    Lanes c_x = p2[kx] - *o[kx], c_y = p2[ky] - *o[ky], c_z = p2[kz] - *o[kz];
-    Lanes ax = a_x + r.Sx * a_z, ay = a_y + r.Sy * a_z;
-    Lanes bx = b_x + r.Sx * b_z, by = b_y + r.Sy * b_z;
-    Lanes cx = c_x + r.Sx * c_z, cy = c_y + r.Sy * c_z;
-    Lanes e0 = difference_of_products(bx, cy, by, cx);
-    Lanes e1 = difference_of_products(cx, ay, cy, ax);
-    Lanes e2 = difference_of_products(ax, by, ay, bx);
-    Mask outside = ((e0 < 0) | (e1 < 0) | (e2 < 0)) & ((e0 > 0) | (e1 > 0) | (e2 > 0));
-    Lanes det = e0 + e1 + e2;
-    Lanes az = r.Sz * a_z, bz = r.Sz * b_z, cz = r.Sz * c_z;
-    Lanes t_scaled = e0 * az + e1 * bz + e2 * cz;
-    Lanes lo = min * det, hi = max * det;
-    Mask out_negative = (det < 0) & ((t_scaled >= lo) | (t_scaled < hi));
-    Mask out_positive = (det > 0) & ((t_scaled <= lo) | (t_scaled > hi));
-    return ~(outside | (det == 0) | out_negative | out_positive);
-    // END SOLUTION
+    const Lanes o[3] = {r.o.x, r.o.y, r.o.z};
+    return sheared_candidates(v[0], v[1], v[2], o, r.kx, r.ky, r.kz, r.Sx, r.Sy, r.Sz, min, max);
 }
 
 // Each ray's closest hit in `mesh` within (min, max] (max shrinks to it): for the lanes of
