@@ -44,32 +44,47 @@ struct Scene {
     std::vector<std::shared_ptr<const Object>> objects;
 };
 
+// The closest sphere or plane, spheres first; range.max shrinks to it. A later hit by another
+// object forgets it (Nearest{}); record() fills the hit record of whichever is left.
+struct Nearest {
+    const Sphere *sphere = nullptr;
+    const Plane *plane = nullptr;
+    void record(const Ray &ray, double t, Hit &hit) const {
+        if (plane) plane_hit(*plane, ray, t, hit);
+        else if (sphere) sphere_hit(*sphere, ray, t, hit);
+    }
+};
+
+inline Nearest nearest_sphere_or_plane(const Scene &scene, const Ray &ray, Interval &range,
+                                       RayCounts &counts) {
+    Nearest nearest;
+    counts.primitive_tests += scene.spheres.size() + scene.planes.size();
+    for (const Sphere &s : scene.spheres) {
+        double t = sphere_t(s, ray, range);
+        if (t < range.max) range.max = t, nearest.sphere = &s;
+    }
+    for (const Plane &pl : scene.planes) {
+        double t = plane_t(pl, ray);
+        if (range.surrounds(t)) range.max = t, nearest = {nullptr, &pl};
+    }
+    return nearest;
+}
+
 // "Find nearest hit" (slide "How ray tracing works"). The search needs only each object's t;
 // the hit record (point, error bound, normal) is computed once, for the closest.
 inline Hit closest_hit(const Scene &scene, const Ray &ray, RayCounts &counts) {
     Interval range{0, infinity};
-    const Sphere *sphere = nullptr;
-    const Plane *plane = nullptr;
-    counts.primitive_tests += scene.spheres.size() + scene.planes.size();
-    for (const Sphere &s : scene.spheres) {
-        double t = sphere_t(s, ray, range);
-        if (t < range.max) range.max = t, sphere = &s;
-    }
-    for (const Plane &pl : scene.planes) {
-        double t = plane_t(pl, ray);
-        if (range.surrounds(t)) range.max = t, plane = &pl, sphere = nullptr;
-    }
+    Nearest nearest = nearest_sphere_or_plane(scene, ray, range, counts);
     Hit hit;
     for (const auto &object : scene.objects)
-        if (object->hit(ray, range, hit, counts)) range.max = hit.t, plane = nullptr, sphere = nullptr;
-    if (plane) plane_hit(*plane, ray, range.max, hit);
-    else if (sphere) sphere_hit(*sphere, ray, range.max, hit);
+        if (object->hit(ray, range, hit, counts)) range.max = hit.t, nearest = Nearest{};
+    nearest.record(ray, range.max, hit);
     return hit;
 }
 
-// "Objects block light": true as soon as any object lies within the range; no need to sort.
-inline bool any_hit(const Scene &scene, const Ray &ray, const Interval &range,
-                    RayCounts &counts) {
+// Whether a sphere or a plane lies within the range: any_hit()'s first question.
+inline bool sphere_or_plane_blocks(const Scene &scene, const Ray &ray, const Interval &range,
+                                   RayCounts &counts) {
     for (const Sphere &s : scene.spheres) {
         ++counts.primitive_tests;
         if (sphere_blocks(s, ray, range)) return true;
@@ -78,6 +93,13 @@ inline bool any_hit(const Scene &scene, const Ray &ray, const Interval &range,
         ++counts.primitive_tests;
         if (plane_blocks(pl, ray, range)) return true;
     }
+    return false;
+}
+
+// "Objects block light": true as soon as any object lies within the range; no need to sort.
+inline bool any_hit(const Scene &scene, const Ray &ray, const Interval &range,
+                    RayCounts &counts) {
+    if (sphere_or_plane_blocks(scene, ray, range, counts)) return true;
     for (const auto &object : scene.objects)
         if (object->blocks(ray, range, counts)) return true;
     return false;

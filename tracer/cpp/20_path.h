@@ -549,29 +549,17 @@ struct CulledQueries {
 
     Hit closest(const Ray &ray, RayCounts &counts) const {
         Interval range{0, infinity};
-        const Sphere *sphere = nullptr;
-        const Plane *plane = nullptr;
-        counts.primitive_tests += scene.spheres.size() + scene.planes.size();
-        for (const Sphere &s : scene.spheres) {
-            double t = sphere_t(s, ray, range);
-            if (t < range.max) range.max = t, sphere = &s;
-        }
-        for (const Plane &pl : scene.planes) {
-            double t = plane_t(pl, ray);
-            if (range.surrounds(t)) range.max = t, plane = &pl, sphere = nullptr;
-        }
+        Nearest nearest = nearest_sphere_or_plane(scene, ray, range, counts);
         Hit hit;
         if (!objects.empty()) {
             const SlabRay sr(ray);
             const double reach = max_abs(ray.o);
             for (const Bounded &b : objects) {
                 if (!b.bounds.may_hit(sr, reach, range, counts)) continue;
-                if (b.object->hit(ray, range, hit, counts))
-                    range.max = hit.t, plane = nullptr, sphere = nullptr;
+                if (b.object->hit(ray, range, hit, counts)) range.max = hit.t, nearest = Nearest{};
             }
         }
-        if (plane) plane_hit(*plane, ray, range.max, hit);
-        else if (sphere) sphere_hit(*sphere, ray, range.max, hit);
+        nearest.record(ray, range.max, hit);
         return hit;
     }
 
@@ -579,14 +567,7 @@ struct CulledQueries {
         ++counts.shadow;
         const Ray &ray = shadow.ray;
         const Interval range{0, shadow.max_t};
-        for (const Sphere &s : scene.spheres) {
-            ++counts.primitive_tests;
-            if (sphere_blocks(s, ray, range)) return true;
-        }
-        for (const Plane &pl : scene.planes) {
-            ++counts.primitive_tests;
-            if (plane_blocks(pl, ray, range)) return true;
-        }
+        if (sphere_or_plane_blocks(scene, ray, range, counts)) return true;
         if (blockers.empty()) return false;
         const SlabRay sr(ray);
         const double reach = max_abs(ray.o);
