@@ -39,12 +39,9 @@ def exact_inverse(shape: Placed) -> tuple[tuple[tuple[Fraction, ...], ...], Vec]
 
 
 def to_object(shape: Placed, o: Vec, d: Vec) -> tuple[Vec, Vec]:
-    """The world ray (o, d), rationals, in the shape's own coordinates, exactly."""
-    inv, b = exact_inverse(shape)
-    w = _t._sub(o, b)
-    qo = tuple(sum(inv[i][k] * w[k] for k in range(3)) for i in range(3))
-    qd = tuple(sum(inv[i][k] * d[k] for k in range(3)) for i in range(3))
-    return qo, qd  # type: ignore[return-value]
+    """The world ray (o, d), rationals, in the shape's own coordinates, exactly (the rotated
+    boxes' route, study/truth_scenes.py to_object, which reads only the shape's matrix)."""
+    return truth_scenes.to_object(shape, o, d)  # type: ignore[arg-type]
 
 
 _ZERO: Vec = (Fraction(0), Fraction(0), Fraction(0))

@@ -79,12 +79,17 @@ def test_path_tracer_uses_the_wide_search_and_agrees():
     assert differ <= 24 * 24 // 100
 
 
+def _bunny():
+    """The bunny's mesh, and a core scene of it alone."""
+    scene = load_scene(SCENES / "bunny.toml")
+    mesh = next(o for o in scene.objects if isinstance(o, Mesh))
+    return mesh, to_core(dataclasses.replace(scene, objects=(mesh,)))
+
+
 def test_incoherent_rays_from_the_bunny_agree():
     """The bench's bunny-diffuse rays: start just off the surface (the t-error guard and
     starts_off_the_plane_heading_in() decide the triangle they leave), go anywhere."""
-    scene = load_scene(SCENES / "bunny.toml")
-    mesh = next(o for o in scene.objects if isinstance(o, Mesh))
-    core = to_core(dataclasses.replace(scene, objects=(mesh,)))
+    mesh, core = _bunny()
     origins, directions = diffuse_rays(mesh.vertices, mesh.faces, 50_000, seed=3)
     fast = _core.closest_mesh_hits(core, origins, directions, 2, True)
     plain = _core.closest_mesh_hits(core, origins, directions, 2, False)
@@ -96,9 +101,7 @@ def test_incoherent_rays_from_the_bunny_agree():
 
 
 def test_batch_threads_change_nothing():
-    scene = load_scene(SCENES / "bunny.toml")
-    mesh = next(o for o in scene.objects if isinstance(o, Mesh))
-    core = to_core(dataclasses.replace(scene, objects=(mesh,)))
+    mesh, core = _bunny()
     origins, directions = diffuse_rays(mesh.vertices, mesh.faces, 20_000, seed=5)
     one = _core.closest_mesh_hits(core, origins, directions, 1, True)
     two = _core.closest_mesh_hits(core, origins, directions, 2, True)
