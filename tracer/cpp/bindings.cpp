@@ -102,6 +102,25 @@ static rt::Transform transform_from(const std::optional<Matrix34> &m) {
 // (20_path.h), with the lecture's scene queries or with culled ones (the same image).
 enum class Integrator { classic, classic_packets, aov, path, path_culled, aov_packets };
 
+using Vertices = nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig>;
+using Faces = nb::ndarray<const int32_t, nb::shape<-1, 3>, nb::c_contig>;
+
+// A mesh's vertices and triangles from (n, 3) arrays, every face checked to name a vertex.
+static void fill_mesh(rt::Mesh &mesh, const Vertices &vertices, const Faces &faces) {
+    const size_t nv = vertices.shape(0), nf = faces.shape(0);
+    mesh.vertices.resize(nv);
+    for (size_t i = 0; i < nv; ++i)
+        mesh.vertices[i] = {vertices(i, 0), vertices(i, 1), vertices(i, 2)};
+    mesh.triangles.resize(nf);
+    for (size_t i = 0; i < nf; ++i)
+        for (size_t k = 0; k < 3; ++k) {
+            int v = faces(i, k);
+            if (v < 0 || size_t(v) >= nv)
+                throw std::out_of_range("mesh face refers to a missing vertex");
+            mesh.triangles[i][k] = v;
+        }
+}
+
 // The image's memory. The kernel maps a fresh page only when it is first written, one fault
 // per 4 KiB page: a 1920 x 1024 aov image (5 floats a pixel, 39 MB, above the size whose freed
 // memory the C library keeps for reuse) took 9,600 faults in every render, with the render
@@ -305,26 +324,14 @@ NB_MODULE(_core, m) {
             "major_radius"_a, "minor_radius"_a, "to_world"_a, "object"_a, "material"_a)
         .def(
             "add_mesh",
-            [](rt::Scene &s, nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig> vertices,
-               nb::ndarray<const int32_t, nb::shape<-1, 3>, nb::c_contig> faces,
+            [](rt::Scene &s, Vertices vertices, Faces faces,
                std::optional<nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig>> normals,
                const std::string &acceleration, int object, int material,
                std::optional<nb::ndarray<const int32_t, nb::shape<-1>, nb::c_contig>> objects,
                std::optional<nb::ndarray<const int32_t, nb::shape<-1>, nb::c_contig>> materials) {
                 auto mesh = std::make_shared<rt::Mesh>();
-                size_t nv = vertices.shape(0), nf = faces.shape(0);
-                mesh->vertices.resize(nv);
-                for (size_t i = 0; i < nv; ++i)
-                    mesh->vertices[i] = {vertices(i, 0), vertices(i, 1), vertices(i, 2)};
-                mesh->triangles.resize(nf);
-                for (size_t i = 0; i < nf; ++i) {
-                    for (size_t k = 0; k < 3; ++k) {
-                        int v = faces(i, k);
-                        if (v < 0 || size_t(v) >= nv)
-                            throw std::out_of_range("mesh face refers to a missing vertex");
-                        mesh->triangles[i][k] = v;
-                    }
-                }
+                fill_mesh(*mesh, vertices, faces);
+                const size_t nv = vertices.shape(0), nf = faces.shape(0);
                 if (normals) {
                     if (normals->shape(0) != nv)
                         throw std::invalid_argument("one normal per vertex expected");
@@ -511,18 +518,9 @@ NB_MODULE(_core, m) {
         "the lecture's one-ray traversal, else the wide hierarchy (21_wide_bvh.h).");
     m.def(
         "mesh_hierarchy",
-        [](nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig> vertices,
-           nb::ndarray<const int32_t, nb::shape<-1, 3>, nb::c_contig> faces, int threads) {
+        [](Vertices vertices, Faces faces, int threads) {
             rt::Mesh mesh;
-            const size_t nv = vertices.shape(0), nf = faces.shape(0);
-            for (size_t i = 0; i < nv; ++i)
-                mesh.vertices.push_back({vertices(i, 0), vertices(i, 1), vertices(i, 2)});
-            for (size_t i = 0; i < nf; ++i) {
-                for (size_t k = 0; k < 3; ++k)
-                    if (faces(i, k) < 0 || size_t(faces(i, k)) >= nv)
-                        throw std::out_of_range("mesh face refers to a missing vertex");
-                mesh.triangles.push_back({faces(i, 0), faces(i, 1), faces(i, 2)});
-            }
+            fill_mesh(mesh, vertices, faces);
             mesh.build_threads = threads;
             {
                 nb::gil_scoped_release release;
