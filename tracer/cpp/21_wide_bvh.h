@@ -158,9 +158,11 @@ inline M4 slab_test(const WideNode &node, const SlabRay &r, const Interval &rang
 // of the test (the t-error guard), in intersect_triangle() itself. Lanes are either four
 // triangles and one ray (below: p0, p1, p2 vectors of lanes, o and S doubles) or one triangle
 // and a packet of rays (22_mesh_packets.h: p0, p1, p2 doubles, o and S vectors of lanes).
-template <class P, class O, class S, class R>
-inline auto sheared_candidates(const P &p0, const P &p1, const P &p2, const O &o, int kx, int ky,
-                               int kz, S Sx, S Sy, S Sz, R min, R max) {
+// M, the mask type, is named by the caller: a student's tree replaces the body with a stub, from
+// which no return type could be deduced.
+template <class M, class P, class O, class S, class R>
+inline M sheared_candidates(const P &p0, const P &p1, const P &p2, const O &o, int kx, int ky,
+                            int kz, S Sx, S Sy, S Sz, R min, R max) {
     // BEGIN SOLUTION L08
     // PROMPT: A copy, lane by lane, of intersect_triangle()'s shear, edge functions and range
     // PROMPT: test, for the four triangles of a block or for a packet of rays.
@@ -187,8 +189,8 @@ inline auto sheared_candidates(const P &p0, const P &p1, const P &p2, const O &o
 // sheared_candidates() for a block's four triangles and one ray.
 inline M4 triangle_candidates(const TriangleBlock &block, const WatertightRay &r,
                               const Interval &range) {
-    return sheared_candidates(block.p[0], block.p[1], block.p[2], r.o, r.kx, r.ky, r.kz, r.Sx,
-                              r.Sy, r.Sz, range.min, range.max);
+    return sheared_candidates<M4>(block.p[0], block.p[1], block.p[2], r.o, r.kx, r.ky, r.kz,
+                                  r.Sx, r.Sy, r.Sz, range.min, range.max);
 }
 
 struct WideBVH : MeshAccelerator {

@@ -145,7 +145,8 @@ inline Mask slab_test(const AABB &box, const MeshRaysL &r, Lanes min, Lanes max,
 // the call.
 inline Mask triangle_candidates(const Vec3 *v, const MeshRaysL &r, Lanes min, Lanes max) {
     const Lanes o[3] = {r.o.x, r.o.y, r.o.z};
-    return sheared_candidates(v[0], v[1], v[2], o, r.kx, r.ky, r.kz, r.Sx, r.Sy, r.Sz, min, max);
+    return sheared_candidates<Mask>(v[0], v[1], v[2], o, r.kx, r.ky, r.kz, r.Sx, r.Sy, r.Sz, min,
+                                    max);
 }
 
 // Each ray's closest hit in `mesh` within (min, max] (max shrinks to it): for the lanes of
