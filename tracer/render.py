@@ -136,6 +136,13 @@ class RenderResult:
     #: (objects culled by their world bounds, packets=True).
     integrator: str = "classic"
 
+    def _repr_png_(self) -> bytes:
+        """Jupyter shows a result as its image (tracer/display.py: clipped sRGB; an aov
+        render's normals)."""
+        from tracer.display import picture
+
+        return picture(self).png()
+
 
 def default_threads() -> int:
     """All the cores this process may run on."""

@@ -54,3 +54,9 @@ class Scene:
     def to_dict(self) -> dict[str, Any]:
         """The scene as a plain dict in the scene language; ``parse_scene`` reads it back."""
         return unparse(self)
+
+    def _repr_png_(self) -> bytes:
+        """Jupyter shows a scene as a small render of it (tracer/display.py scene_preview)."""
+        from tracer.display import scene_preview
+
+        return scene_preview(self).png()
