@@ -383,3 +383,23 @@ def test_errors_that_are_not_about_a_scene_are_not_scene_errors():
         run_suites(["nope"], None)
     assert not isinstance(info.value, SceneError)
     assert not issubclass(cm.MitsubaVariantError, SceneError)
+
+
+@pytest.mark.parametrize("bad", [3, -1])
+def test_the_core_refuses_a_face_that_names_a_missing_vertex(bad):
+    """The scene reader refuses such faces first (above); the core checks again, for whoever
+    calls it directly (tracer.rays, the study), and must not read past the vertex array."""
+    import numpy as np
+
+    from tracer import _core
+    from tracer.render import to_core
+
+    vertices = np.zeros((3, 3))
+    good = np.array([[0, 1, 2]], dtype=np.int32)
+    assert len(_core.mesh_hierarchy(vertices, good, 1)[1]) >= 1  # the same call, well formed
+    faces = np.array([[0, 1, bad]], dtype=np.int32)
+    with pytest.raises(IndexError, match="mesh face refers to a missing vertex"):
+        _core.mesh_hierarchy(vertices, faces, 1)
+    core = to_core(tracer.load_scene(scene_dict(objects=[sphere([0, 0, 0], 1)])))
+    with pytest.raises(IndexError, match="mesh face refers to a missing vertex"):
+        core.add_mesh(vertices, faces, None, "bvh", 0, 0)
