@@ -38,7 +38,7 @@ def pytest_unconfigure(config: pytest.Config) -> None:
 # most three waiting on each). pytest-xdist 3.8's own loadgroup marks a group by renaming the
 # test's nodeid, which pytest 9 no longer lets it do (every test stays alone), so the units
 # are given here, by module.
-GROUPED = ("tests/reports/", "tests/study/")
+GROUPED = ("tests/reports/", "tests/study/", "tests/batch/")  # batch: one LocalCluster
 
 
 @pytest.hookimpl(optionalhook=True)  # pytest-xdist's hook: `-p no:xdist` runs have none
