@@ -387,17 +387,20 @@ def write_timings(path: Path, outcomes: Sequence[Outcome], engine: Engine) -> No
 # --- the verbs' flags ----------------------------------------------------------------------
 
 
-def add_engine_arguments(parser: argparse.ArgumentParser, default_serial: bool = False) -> None:
-    """``--workers N`` and ``--scheduler ADDRESS`` (one or the other)."""
+def add_engine_arguments(
+    parser: argparse.ArgumentParser, default_serial: bool = False, zero: str = ""
+) -> None:
+    """``--workers N`` and ``--scheduler ADDRESS`` (one or the other); ``default_serial``: no
+    flag means 0 (the verb's own way without Dask, which ``zero`` says)."""
     group = parser.add_mutually_exclusive_group()
-    default = "0 (in this process)" if default_serial else "one per core"
+    zero = zero or "serially in this process, without Dask"
+    default = "0" if default_serial else "one per core"
     group.add_argument(
         "--workers",
         type=_count,
         default=0 if default_serial else None,
         metavar="N",
-        help=f"a local Dask cluster of N worker processes (default {default}; 0: serially in "
-        "this process, without Dask)",
+        help=f"a local Dask cluster of N worker processes (default {default}; 0: {zero})",
     )
     group.add_argument(
         "--scheduler",

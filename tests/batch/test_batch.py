@@ -212,3 +212,24 @@ def test_the_cli_grades_a_class_and_keeps_one_submission_as_before(
     two = subprocess.run([*base, str(subs / "solution"), str(subs / "crash")],
                          capture_output=True, text=True, timeout=60)  # fmt: skip
     assert two.returncode == 2 and "give --out GRADES" in two.stderr
+
+
+def test_the_study_on_dask_writes_what_its_process_pool_writes(tmp_path: Path, client) -> None:
+    from study.run import run
+
+    run(tmp_path / "jobs", quick=True, family="scaling", jobs=1)
+    engine = Engine(scheduler=client.scheduler.address)
+    run(tmp_path / "dask", quick=True, family="scaling", engine=engine)
+    for name in ("breakdown.json", "failures.json"):
+        assert (tmp_path / "jobs" / name).read_bytes() == (tmp_path / "dask" / name).read_bytes()
+
+    def untimed(where: str) -> list:  # the rows' time_per_ray_s is a measured time
+        rows = json.loads((tmp_path / where / "rows.json").read_text())
+        return [r for r in rows if r["metric"] != "time_per_ray_s"]
+
+    assert untimed("jobs") == untimed("dask") and untimed("jobs")
+    shard = tmp_path / "dask" / "shards" / "scaling-quick.json"
+    made = shard.stat().st_mtime_ns
+    run(tmp_path / "dask", quick=True, family="scaling", engine=engine)  # run again: skipped
+    assert shard.stat().st_mtime_ns == made
+    assert untimed("jobs") == untimed("dask")
