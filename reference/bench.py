@@ -276,6 +276,7 @@ SUITES: dict[str, Callable[..., list[dict[str, Any]]]] = {
     "convergence": suite_convergence,
     "grading": lambda: __import__("lessons.bench").bench.suite_grading(),  # lessons/bench.py
     "report": lambda: __import__("reports.bench").bench.suite_report(),  # reports/bench.py
+    "batch": lambda: __import__("reference.bench_batch").bench_batch.suite_batch(),  # Dask
 }
 
 
