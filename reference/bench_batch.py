@@ -141,7 +141,7 @@ def suite_batch(scenes: bool = False) -> list[dict[str, Any]]:
     # The overhead per task: no-op tasks through a running 2-worker cluster, one at a time
     # (the round trip: submit, schedule, run, result back) and 200 at once (the throughput).
     with (
-        LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None) as cluster,
+        LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=":0") as cluster,
         Client(cluster) as client,
     ):
         client.submit(noop, pure=False).result()  # warm: the function's import on a worker

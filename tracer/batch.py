@@ -240,10 +240,11 @@ def client_for(engine: Engine) -> Iterator[Any]:
         return
     n = engine.workers or os.cpu_count() or 1
     # processes: each task compiles and renders with its own threads and child processes, and
-    # a worker that dies takes only its own task; no dashboard: nothing listens on a port.
+    # a worker that dies takes only its own task; the dashboard on a free port, never 8787
+    # (a second cluster on the machine, or a scheduler the user started, may hold it).
     with (
         LocalCluster(
-            n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None
+            n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0"
         ) as cluster,
         Client(cluster) as client,
     ):

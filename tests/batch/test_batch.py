@@ -31,7 +31,7 @@ def client():
     """Two worker processes, one thread each, as `--workers 2` starts them; once per module
     (a cluster starts in about 2 s)."""
     with (
-        LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None) as cluster,
+        LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=":0") as cluster,
         Client(cluster) as c,
     ):
         yield c
@@ -64,7 +64,7 @@ def test_results_do_not_depend_on_the_engine(tmp_path: Path, subs: Path, client)
             outcomes = _grade(subs, names, out, Engine(workers=0))
         elif engine == "1 worker":
             with (
-                LocalCluster(n_workers=1, threads_per_worker=1, dashboard_address=None) as one,
+                LocalCluster(n_workers=1, threads_per_worker=1, dashboard_address=":0") as one,
                 Client(one) as c1,
             ):
                 outcomes = _grade(subs, names, out, client=c1)
@@ -233,3 +233,16 @@ def test_the_study_on_dask_writes_what_its_process_pool_writes(tmp_path: Path, c
     run(tmp_path / "dask", quick=True, family="scaling", engine=engine)  # run again: skipped
     assert shard.stat().st_mtime_ns == made
     assert untimed("jobs") == untimed("dask")
+
+
+def test_convergence_on_dask_times_a_case_per_task_under_its_machines_lock(client) -> None:
+    from reference.convergence import batched
+
+    tiny = {"width": 8, "height": 8, "sweep": (4,), "reference_spp": 64, "repeats": 1,
+            "renderers": ("rtlab",)}  # fmt: skip
+    cases = (("a", "path", tiny), ("b", "path", tiny | {"sweep": (4, 8)}))
+    made = dict(batched(Engine(scheduler=client.scheduler.address), cases))
+    assert [r["spp"] for r in made["a"]] == [4] and [r["spp"] for r in made["b"]] == [4, 8]
+    row = made["b"][1]
+    assert row["renderer"] == "rtlab" and row["seconds"] > 0 and row["value"] > 0
+    assert row["host"] and row["case"] == "cornell_box-8x8"
