@@ -317,11 +317,18 @@ def render_reference(lesson: str, name: str, directory: str) -> dict[str, Any]:
 
     from lessons.scene_checks import reference_file, references
 
-    os.environ["RTLAB_REFERENCES"] = directory  # the worker's cache is the client's
     check = next(c for c in reference_checks(None if lesson == "integration" else lesson)
                  if c.lesson == lesson and c.name == name)  # fmt: skip
-    images = references(check)
-    return {"file": reference_file(check).name, "arrays": sorted(images)}
+    before = os.environ.get("RTLAB_REFERENCES")
+    os.environ["RTLAB_REFERENCES"] = directory  # the worker's cache is the client's
+    try:
+        images = references(check)
+        return {"file": reference_file(check).name, "arrays": sorted(images)}
+    finally:  # a worker's later tasks see its own environment again
+        if before is None:
+            os.environ.pop("RTLAB_REFERENCES", None)
+        else:
+            os.environ["RTLAB_REFERENCES"] = before
 
 
 def cmd_references(lesson: str | None, every: bool, engine: Any) -> int:

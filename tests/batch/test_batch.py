@@ -246,3 +246,20 @@ def test_convergence_on_dask_times_a_case_per_task_under_its_machines_lock(clien
     row = made["b"][1]
     assert row["renderer"] == "rtlab" and row["seconds"] > 0 and row["value"] > 0
     assert row["host"] and row["case"] == "cornell_box-8x8"
+
+
+def test_the_references_batch_renders_each_scene_once(tmp_path: Path, client, monkeypatch):
+    from lessons.cli import cmd_references, reference_checks
+    from lessons.scene_checks import reference_file
+
+    monkeypatch.setenv("RTLAB_REFERENCES", str(tmp_path / "refs"))
+    engine = Engine(scheduler=client.scheduler.address)
+    checks = reference_checks("L04")
+    assert len(checks) >= 2
+    assert cmd_references("L04", False, engine) == 0
+    files = [reference_file(c) for c in checks]
+    assert all(f.is_file() and f.is_relative_to(tmp_path / "refs") for f in files)
+    made = [f.stat().st_mtime_ns for f in files]
+    assert cmd_references("L04", False, engine) == 0  # finished before: skipped
+    assert [f.stat().st_mtime_ns for f in files] == made
+    assert cmd_references(None, False, engine) == 2  # neither --all nor --lesson
