@@ -1,17 +1,22 @@
 """``rtlab lesson list | show Lnn | student Lnn --out DIR [--from PREV] | grade DIR [--public]
-[--report OUT] | check [--lesson Lnn] | autograder Lnn --out ZIP``: the verb's work (the
-parser's entry lives in tracer/cli.py with the other verbs)."""
+[--report OUT] | grade DIR... --out GRADES [--workers N | --scheduler ADDR] | references --all
+| check [--lesson Lnn] | autograder Lnn --out ZIP``: the verb's work (the parser's entry lives
+in tracer/cli.py with the other verbs). The batches (a class, every lesson's references) go
+through tracer/batch.py."""
 
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from pathlib import Path
+from typing import Any
 
 from lessons.catalog import LESSONS, UnknownLessonError, get_lesson
 from lessons.grader import NoChecksError
 from lessons.markers import MarkerError
 from lessons.student import StudentTreeError, write_student_tree
+from tracer.batch import BatchError, add_engine_arguments
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -27,8 +32,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         dest="from_dir",
         help="an earlier tree of the student's: its code of the earlier lessons is carried over",
     )
-    p = sub.add_parser("grade", help="grade a submission: probes of the lesson's concepts")
-    p.add_argument("submission", help="a directory of C++ files named as in tracer/cpp/")
+    p = sub.add_parser(
+        "grade",
+        help="grade a submission: probes of the lesson's concepts; several (a class) with --out",
+    )
+    p.add_argument(
+        "submission",
+        nargs="+",
+        help="a directory of C++ files named as in tracer/cpp/; with --out, any number of them",
+    )
     p.add_argument(
         "--lesson", help="the lesson to grade (default: every lesson the submission's files touch)"
     )
@@ -52,6 +64,22 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="with --report: the page's images inlined as data: URIs (one file to mail)",
     )
+    p.add_argument(
+        "--out",
+        metavar="GRADES",
+        help="a class: each submission's results.json in GRADES/<its name>/, a summary in "
+        "GRADES/summary.json and summary.txt, timings in GRADES/timings.json; graded as a "
+        "batch (tracer/batch.py: --workers, --scheduler); a submission graded before, "
+        "unchanged, is skipped",
+    )
+    add_engine_arguments(p)
+    p = sub.add_parser(
+        "references",
+        help="render the lessons' POV-Ray and Mitsuba references into their cache, as a batch",
+    )
+    p.add_argument("--all", action="store_true", help="every lesson's scenes (and Ex 25's)")
+    p.add_argument("--lesson", help="only this lesson's scenes")
+    add_engine_arguments(p)
     p = sub.add_parser(
         "check",
         help="instructor: markers, stub trees, solution and known-wrong versions of every lesson",
@@ -182,6 +210,149 @@ def cmd_autograder(lesson: str, out: str) -> int:
     return 0
 
 
+# --- batches: a class, the references (tracer/batch.py) ------------------------------------
+
+
+def class_tasks(
+    submissions: list[Path], lesson: str | None, out: Path, public: bool, scenes: bool
+) -> list[Any]:
+    """One task per submission: graded into out/<its directory's name>/, keyed by the
+    submission's files, the options and the grader's sources."""
+    from lessons.grader import GRADER_SOURCES, grade_into
+    from lessons.scene_checks import ROOT
+    from lessons.student import _submitted_files
+    from tracer.batch import DONE, BatchError, Task, digest, sources_digest
+
+    names: dict[str, Path] = {}
+    for path in submissions:
+        name = path.resolve().name
+        if name in names:
+            raise BatchError(
+                f"{names[name]} and {path}: two submissions named {name!r}; each is graded "
+                f"into --out/<its directory's name>/"
+            )
+        names[name] = path
+    grader = sources_digest(ROOT, GRADER_SOURCES)
+    tasks = []
+    for name, path in names.items():
+        files = list(_submitted_files(path).values()) if path.is_dir() else []
+        key = digest(lesson, public, scenes, grader, files=files)
+        args = (str(path.resolve()), lesson, str((out / name).resolve()), public, scenes)
+        tasks.append(Task(name, grade_into, args, (out / name / DONE).resolve(), key))
+    return tasks
+
+
+def class_summary(lesson: str | None, outcomes: list[Any]) -> dict[str, Any]:
+    """The class's summary: per submission (in name order) its score, the diagnosis's first
+    line and its faults, or why its task failed. No timing: the same on every engine."""
+    rows = []
+    for o in sorted(outcomes, key=lambda o: o.name):
+        row: dict[str, Any] = {"name": o.name}
+        if o.status == "error":
+            row |= {"status": "error", "reason": o.reason}
+        else:
+            row |= {"status": "failed" if o.reason else "graded", **o.data}
+            if o.reason:
+                row["reason"] = o.reason
+        rows.append(row)
+    return {"lesson": lesson, "submissions": rows}
+
+
+def format_class_table(summary: dict[str, Any]) -> str:
+    rows = summary["submissions"]
+    scores = [f"{r['score']:g} / {r['max_score']:g}" if "score" in r else "-" for r in rows]
+    width = max([len("submission"), *(len(r["name"]) for r in rows)])
+    wide = max([len("score"), *(len(s) for s in scores)])
+    lines = [f"{'submission':<{width}}  {'score':>{wide}}  {'status':<7}  diagnosis"]
+    for r, score in zip(rows, scores, strict=True):
+        said = r.get("diagnosis") or r.get("reason", "")
+        lines.append(f"{r['name']:<{width}}  {score:>{wide}}  {r['status']:<7}  {said[:90]}")
+    return "\n".join(lines) + "\n"
+
+
+def cmd_grade_class(
+    submissions: list[str], lesson: str | None, out: str, public: bool, scenes: bool, engine: Any
+) -> int:
+    """A class as a batch. Exit status 0 when every submission was graded (whatever it
+    scored, and also when it crashed: its results.json says so), 1 when a task itself failed
+    (the grader's fault or the cluster's: the summary says which and why)."""
+    from tracer.batch import run_batch, summary, write_atomic, write_timings
+
+    if lesson is not None:
+        lesson = get_lesson(lesson).id
+    grades = Path(out)
+    if grades.exists() and not grades.is_dir():
+        print(f"rtlab: error: --out: {out} is a file; expected a directory", file=sys.stderr)
+        return 2
+    tasks = class_tasks([Path(s) for s in submissions], lesson, grades, public, scenes)
+    print(f"rtlab: grading {len(tasks)} submissions on {engine.describe()}", file=sys.stderr)
+    outcomes = run_batch(tasks, engine, desc=f"grading {lesson or 'submissions'}")
+    data = class_summary(lesson, outcomes)
+    write_atomic(grades / "summary.json", json.dumps(data, indent=1) + "\n")
+    table = format_class_table(data)
+    write_atomic(grades / "summary.txt", table)
+    write_timings(grades / "timings.json", outcomes, engine)
+    print(table, end="")
+    print(summary(outcomes, "submissions"))
+    print(f"rtlab: wrote {grades / 'summary.json'}, {grades / 'summary.txt'} and each "
+          f"submission's results.json in {grades}/<name>/")  # fmt: skip
+    return 1 if any(o.status == "error" for o in outcomes) else 0
+
+
+def reference_checks(lesson: str | None) -> list[Any]:
+    """The scene checks whose references a lesson's grading reads: each lesson's scenes (or
+    one lesson's), and the integration check's Ex 25 (with every lesson)."""
+    from lessons.grader import INTEGRATION_SCENE, lessons_with_checks
+    from lessons.scene_checks import lesson_scenes
+
+    chosen = [get_lesson(lesson).id] if lesson else lessons_with_checks()
+    checks = [c for each in chosen for c in lesson_scenes(each)]
+    return checks if lesson else [*checks, INTEGRATION_SCENE]
+
+
+def render_reference(lesson: str, name: str, directory: str) -> dict[str, Any]:
+    """One task: one scene's POV-Ray and Mitsuba references into the cache `directory`
+    (lessons/scene_checks.py references(): keyed, written atomically, under a lock)."""
+    import os
+
+    from lessons.scene_checks import reference_file, references
+
+    check = next(c for c in reference_checks(None if lesson == "integration" else lesson)
+                 if c.lesson == lesson and c.name == name)  # fmt: skip
+    before = os.environ.get("RTLAB_REFERENCES")
+    os.environ["RTLAB_REFERENCES"] = directory  # the worker's cache is the client's
+    try:
+        images = references(check)
+        return {"file": reference_file(check).name, "arrays": sorted(images)}
+    finally:  # a worker's later tasks see its own environment again
+        if before is None:
+            os.environ.pop("RTLAB_REFERENCES", None)
+        else:
+            os.environ["RTLAB_REFERENCES"] = before
+
+
+def cmd_references(lesson: str | None, every: bool, engine: Any) -> int:
+    from lessons.scene_checks import reference_dir, reference_file, reference_key
+    from tracer.batch import Task, run_batch, summary
+
+    if not every and lesson is None:
+        print("rtlab: error: lesson references: give --all (every lesson) or --lesson Lnn",
+              file=sys.stderr)  # fmt: skip
+        return 2
+    directory = reference_dir().resolve()
+    tasks = []
+    for check in reference_checks(lesson):
+        done = reference_file(check).with_suffix(".done.json").resolve()
+        tasks.append(Task(f"{check.lesson}-{check.name}", render_reference,
+                          (check.lesson, check.name, str(directory)), done,
+                          reference_key(check)))  # fmt: skip
+    print(f"rtlab: rendering {len(tasks)} scenes' references into {directory} on "
+          f"{engine.describe()}", file=sys.stderr)  # fmt: skip
+    outcomes = run_batch(tasks, engine, desc="references")
+    print(summary(outcomes, "scenes"))
+    return 1 if any(o.status in ("failed", "error") for o in outcomes) else 0
+
+
 def run(args: argparse.Namespace) -> int:
     """Exit status: 0 done; 2 bad input (an unknown lesson, an output that exists, bad markers)."""
     try:
@@ -189,13 +360,38 @@ def run(args: argparse.Namespace) -> int:
             return cmd_list()
         if args.lesson_command == "show":
             return cmd_show(args.lesson)
+        if args.lesson_command == "references":
+            from tracer.batch import engine_from
+
+            return cmd_references(args.lesson, args.all, engine_from(args))
+        batch = args.lesson_command == "grade" and (
+            args.out is not None
+            or len(args.submission) > 1
+            or args.workers is not None
+            or args.scheduler is not None
+        )
+        if batch:
+            from tracer.batch import engine_from
+
+            if args.out is None:
+                print("rtlab: error: grading a class (several submissions, --workers, "
+                      "--scheduler) writes a directory of results: give --out GRADES",
+                      file=sys.stderr)  # fmt: skip
+                return 2
+            if args.json_path or args.report:
+                print("rtlab: error: --out grades a class: each results.json goes to "
+                      "GRADES/<name>/; --json and --report are for one submission",
+                      file=sys.stderr)  # fmt: skip
+                return 2
+            return cmd_grade_class(args.submission, args.lesson, args.out, args.public,
+                                   not args.no_scenes, engine_from(args))  # fmt: skip
         if args.lesson_command == "grade":
             if args.single_file and args.report is None:
                 print("rtlab: error: --single-file inlines the feedback page's images: "
                       "give --report DIR too", file=sys.stderr)  # fmt: skip
                 return 2
             return cmd_grade(
-                args.submission,
+                args.submission[0],
                 args.lesson,
                 args.json_path,
                 args.public,
@@ -208,6 +404,6 @@ def run(args: argparse.Namespace) -> int:
         if args.lesson_command == "autograder":
             return cmd_autograder(args.lesson, args.out)
         return cmd_student(args.lesson, args.out, args.from_dir)
-    except (UnknownLessonError, StudentTreeError, MarkerError, NoChecksError) as error:
+    except (UnknownLessonError, StudentTreeError, MarkerError, NoChecksError, BatchError) as error:
         print(f"rtlab: error: {error}", file=sys.stderr)
         return 2

@@ -125,11 +125,14 @@ class Result:
     def max_score(self) -> float:
         return round(sum(round(t.max_score, 4) for t in self.tests), 4)
 
-    def as_gradescope(self) -> dict:
+    def as_gradescope(self, timing: bool = True) -> dict:
+        """Gradescope's results.json; without ``timing`` (a class graded in a batch) no
+        execution_time, so that the file does not depend on the machine or the engine: the
+        batch keeps the timings in a file of their own (grades/timings.json)."""
         output = "\n\n".join([self.diagnosis, *self.notes]).strip()
         return {
             "score": self.score,
-            "execution_time": round(self.execution_time, 3),
+            **({"execution_time": round(self.execution_time, 3)} if timing else {}),
             "output": output,
             "output_format": "md",
             "visibility": "visible",
@@ -143,12 +146,12 @@ class Result:
             },
         }
 
-    def write(self, path: str | Path) -> None:
+    def write(self, path: str | Path, timing: bool = True) -> None:
         """results.json, atomically (a temporary file beside it, renamed)."""
         from tracer.image import atomic_path
 
         with atomic_path(path) as tmp:
-            tmp.write_text(json.dumps(self.as_gradescope(), indent=2) + "\n")
+            tmp.write_text(json.dumps(self.as_gradescope(timing), indent=2) + "\n")
 
 
 class NoChecksError(ValueError):
@@ -887,3 +890,49 @@ def grade(
     result.diagnosis = "\n\n".join(broken + [d for d in diagnoses if d not in broken])
     result.execution_time = time.monotonic() - start
     return result
+
+
+# --- a class in a batch (rtlab lesson grade DIRS --out GRADES; tracer/batch.py) --------------
+
+#: The kinds of a check's failure that are the submission's faults rather than wrong answers:
+#: a batch counts its task as failed (with its results.json written all the same).
+FAULTS = ("crash", "hang", "flood", "memory", "compile_error", "grader_error", "empty")
+#: What a graded result depends on besides the submission: the grader, the lessons' checks
+#: and scenes, the core the submission is laid over, the references' runners and converters.
+GRADER_SOURCES = ("lessons/**/*.py", "lessons/**/*.h", "lessons/**/*.cpp", "lessons/**/*.json",
+                  "lessons/**/*.toml", "tracer/cpp/*", "tracer/scenes/ex25.toml",
+                  "reference/*.py", "converters/*.py")  # fmt: skip
+
+
+def grade_into(
+    submission: str, lesson: str | None, out: str, public: bool = False, scenes: bool = True
+) -> dict:
+    """One submission of a class: graded into the directory ``out`` (results.json without
+    timing, the heat maps of failing scenes beside it), which replaces the old one whole only
+    when grading finished. Returns what the class summary needs: the score, the diagnosis's
+    first line, the faults; ``status`` "failed" when the submission crashed, hung, flooded,
+    ran out of memory or did not compile (its results.json says so, as for one submission)."""
+    from tracer.batch import staged_dir
+
+    target = Path(out)
+    with staged_dir(target) as stage:
+        result = grade(Path(submission), lesson, public=public, scenes=scenes, artifacts=stage)
+        result.write(stage / "results.json", timing=False)
+    faults: dict[str, int] = {}
+    for t in result.tests:
+        if t.kind in FAULTS and t.status == "failed":
+            faults[t.kind] = faults.get(t.kind, 0) + 1
+    first = result.diagnosis.split("\n", 1)[0]
+    data = {
+        "score": result.score,
+        "max_score": result.max_score,
+        "passed": sum(t.status == "passed" for t in result.tests),
+        "checks": len(result.tests),
+        "lessons": result.lessons,
+        "diagnosis": first,
+        "faults": faults,
+    }
+    if faults:
+        said = ", ".join(f"{k} in {n} check{'s' if n > 1 else ''}" for k, n in faults.items())
+        data |= {"status": "failed", "reason": f"{said}: {first}"}
+    return data

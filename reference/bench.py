@@ -249,7 +249,9 @@ def suite_geometry(
     return rows
 
 
-def suite_convergence(out_dir: str | os.PathLike[str] = "out") -> list[dict[str, Any]]:
+def suite_convergence(
+    out_dir: str | os.PathLike[str] = "out", engine: Any = None
+) -> list[dict[str, Any]]:
     """Error against run time (reference/convergence.py): the Cornell box path traced by rtlab
     and Mitsuba, and the demo scene antialiased by rtlab, POV-Ray and Mitsuba; writes a log-log
     plot per case beside the JSON and prints the time each renderer needs to reach an error."""
@@ -260,7 +262,11 @@ def suite_convergence(out_dir: str | os.PathLike[str] = "out") -> list[dict[str,
              ("cornell-128", convergence(width=128, height=128,
                                          renderers=("rtlab", "mitsuba-llvm",
                                                     "mitsuba-llvm-stratified"))),
-             ("ex25", convergence_classic()))  # fmt: skip
+             ("ex25", convergence_classic())) if engine is None else ()  # fmt: skip
+    if engine is not None:  # --workers/--scheduler: a case per task (reference/convergence.py)
+        from reference.convergence import batched
+
+        cases = tuple(batched(engine))
     for name, made in cases:
         path = Path(out_dir) / f"convergence-{name}.png"
         plot(made, path)
@@ -276,6 +282,7 @@ SUITES: dict[str, Callable[..., list[dict[str, Any]]]] = {
     "convergence": suite_convergence,
     "grading": lambda: __import__("lessons.bench").bench.suite_grading(),  # lessons/bench.py
     "report": lambda: __import__("reports.bench").bench.suite_report(),  # reports/bench.py
+    "batch": lambda: __import__("reference.bench_batch").bench_batch.suite_batch(),  # Dask
 }
 
 
@@ -283,7 +290,9 @@ class UnknownSuiteError(ValueError):
     """A benchmark suite that does not exist: a usage error, not a fault of any scene."""
 
 
-def run_suites(names: list[str], json_path: str | os.PathLike[str] | None) -> list[dict]:
+def run_suites(
+    names: list[str], json_path: str | os.PathLike[str] | None, engine: Any = None
+) -> list[dict]:
     unknown = [n for n in names if n not in SUITES]
     if unknown:
         raise UnknownSuiteError(f"unknown suite {unknown[0]!r}; expected {', '.join(SUITES)}")
@@ -292,8 +301,8 @@ def run_suites(names: list[str], json_path: str | os.PathLike[str] | None) -> li
     for name in names:
         suite = SUITES[name]
         made = (
-            suite(out_dir=Path(json_path).parent)
-            if name == "convergence" and json_path
+            suite(out_dir=Path(json_path).parent if json_path else "out", engine=engine)
+            if name == "convergence" and (json_path or engine is not None)
             else suite()
         )
         for row in made:

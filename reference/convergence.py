@@ -223,3 +223,59 @@ def convergence_classic(
                          "seconds": seconds, "relmse": e["relmse"], "flip": e["flip"],
                          "reference_spp": reference_spp})  # fmt: skip
     return rows
+
+
+# --- on Dask (rtlab bench convergence --workers N | --scheduler ADDRESS: tracer/batch.py) ---
+
+#: The cases of `rtlab bench convergence` (reference/bench.py suite_convergence): a name, the
+#: kind ("path": convergence(), "classic": convergence_classic()) and its arguments.
+CASES: tuple[tuple[str, str, dict[str, Any]], ...] = (
+    ("cornell", "path", {}),
+    ("cornell-128", "path", {"width": 128, "height": 128,
+                             "renderers": ("rtlab", "mitsuba-llvm", "mitsuba-llvm-stratified")}),
+    ("ex25", "classic", {}),
+)  # fmt: skip
+
+
+def _host_lock() -> Any:
+    """On a Dask worker, the cluster-wide lock of this worker's machine (distributed.Lock,
+    named by the host): two cases timed on one machine at once would share its cores and
+    spoil each other's timings. Elsewhere (serially) nothing to lock."""
+    import contextlib
+    import socket
+
+    try:
+        from distributed import Lock, get_worker
+
+        get_worker()
+    except (ImportError, ValueError):  # not in a worker
+        return contextlib.nullcontext()
+    return Lock(f"rtlab-timing-{socket.gethostname()}")
+
+
+def case_task(kind: str, kwargs: dict[str, Any]) -> dict[str, Any]:
+    """One batch task: one case whole (its reference, every renderer's sweep interleaved, as
+    serially), holding its machine's timing lock, so that its renderers are timed side by side
+    on one machine and no other case's renders run beside them there. Each row names its host
+    (the rows' threads are that machine's cores)."""
+    import socket
+
+    with _host_lock():
+        made = convergence(**kwargs) if kind == "path" else convergence_classic(**kwargs)
+    return {"rows": [r | {"host": socket.gethostname()} for r in made]}
+
+
+def batched(engine: Any, cases: tuple[tuple[str, str, dict[str, Any]], ...] = CASES
+            ) -> list[tuple[str, list[dict[str, Any]]]]:  # fmt: skip
+    """The cases as tasks of the batch layer: on a cluster of several machines the cases run
+    at once, one a machine; on one machine (a LocalCluster) one after the other, whatever the
+    workers, since a timing must not share its cores. What a task is here, and why: a whole
+    case, because its renderers must be timed on the same machine, interleaved, to be
+    compared (a renderer per task could put two renderers of one case on two machines)."""
+    from tracer.batch import BatchError, Task, run_batch, summary
+
+    tasks = [Task(name, case_task, (kind, kwargs)) for name, kind, kwargs in cases]
+    outcomes = run_batch(tasks, engine, retries=0, desc="convergence")
+    if any(o.status != "ok" for o in outcomes):
+        raise BatchError(summary(outcomes, "convergence cases"))
+    return [(o.name, o.data["rows"]) for o in outcomes]

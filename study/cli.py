@@ -20,8 +20,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--jobs",
         type=int,
         default=None,
-        help="families traced at once, a process each (default: one a core)",
+        help="families traced at once, a process each (default: one a core); or, with "
+        "--workers or --scheduler, each family a task of a Dask batch (tracer/batch.py)",
     )
+    from tracer.batch import add_engine_arguments
+
+    add_engine_arguments(p, default_serial=True, zero="no Dask: --jobs")
     f = sub.add_parser("freeze", help="freeze failing rays of a run as regression tests")
     f.add_argument("--from", dest="source", required=True,
                    help="a run's failures.json (from rtlab study stiff)")  # fmt: skip
@@ -50,9 +54,19 @@ def run(args: argparse.Namespace) -> int:
         return freeze(args)
     from study.run import StudyError
     from study.run import run as run_study
+    from tracer.batch import Engine
 
+    # --workers N (N > 0) or --scheduler: the batch layer; otherwise --jobs, as before.
+    engine = None
+    if args.scheduler is not None or args.workers:
+        if args.jobs is not None:
+            print("rtlab: error: --jobs is the study's own process pool; --workers and "
+                  "--scheduler the batch layer's: give one of them", file=sys.stderr)  # fmt: skip
+            return 2
+        engine = Engine(args.workers, args.scheduler)
     try:
-        summary = run_study(Path(args.out), quick=args.quick, family=args.family, jobs=args.jobs)
+        summary = run_study(Path(args.out), quick=args.quick, family=args.family, jobs=args.jobs,
+                            engine=engine)  # fmt: skip
     except StudyError as error:
         print(f"rtlab: error: {error}", file=sys.stderr)
         return 2

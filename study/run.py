@@ -217,12 +217,62 @@ def _family_job(name: str, quick: bool, include_mitsuba: bool) -> tuple[list, li
     return rows, fails, time.perf_counter() - t0
 
 
+#: What a family's shard depends on besides its name and options: the study's code, the core
+#: it traces (the methods call tracer._core) and the bindings.
+STUDY_SOURCES = ("study/*.py", "tracer/cpp/*", "tracer/*.py", "converters/*.py")
+
+
+def family_shard(name: str, quick: bool, include_mitsuba: bool, path: str) -> dict[str, Any]:
+    """One batch task (tracer/batch.py): a family's rows and failures into the shard file
+    `path` (atomically); what it returns is the seconds, kept apart from the shard (which
+    must not depend on the machine)."""
+    from tracer.batch import write_atomic
+
+    rows, fails, secs = _family_job(name, quick, include_mitsuba)
+    write_atomic(Path(path), json.dumps({"rows": rows, "failures": fails}, indent=1,
+                                        allow_nan=False) + "\n")  # fmt: skip
+    return {"seconds": round(secs, 3)}
+
+
+def _batched(families: list[Family], out: Path, quick: bool, include_mitsuba: bool,
+             engine: Any) -> list[tuple[list, list, float]]:  # fmt: skip
+    """Each family a task of the batch layer, its shard in out/shards/ keyed by what went
+    in; a shard of an earlier run with the same key is read, not traced again."""
+    from study import __file__ as study_init
+    from tracer.batch import Task, digest, run_batch, sources_digest, summary
+
+    root = Path(study_init).resolve().parent.parent
+    code = sources_digest(root, STUDY_SOURCES)
+    shards = (out / "shards").resolve()
+    tasks = []
+    # The costliest first, so that the last to finish is a short one.
+    for f in sorted(families, key=lambda f: -len(f.quick_values if quick else f.values)):
+        key = digest(f.name, quick, include_mitsuba, code)
+        path = shards / f"{f.name}-{'quick' if quick else 'full'}.json"
+        tasks.append(Task(f.name, family_shard, (f.name, quick, include_mitsuba, str(path)),
+                          path.with_suffix(".done.json"), key))  # fmt: skip
+    outcomes = {o.name: o for o in run_batch(tasks, engine, desc="study")}
+    bad = [o for o in outcomes.values() if o.status != "ok" and o.status != "skipped"]
+    if bad:
+        raise StudyError(summary(list(outcomes.values()), "families"))
+    made = []
+    for f in families:  # FAMILIES' order, whatever order they finished in
+        path = shards / f"{f.name}-{'quick' if quick else 'full'}.json"
+        shard = json.loads(path.read_text())
+        made.append((shard["rows"], shard["failures"], outcomes[f.name].data.get("seconds", 0.0)))
+    return made
+
+
 def run(out: Path, quick: bool = False, family: str | None = None,
-        include_mitsuba: bool = True, jobs: int | None = None) -> dict[str, Any]:  # fmt: skip
+        include_mitsuba: bool = True, jobs: int | None = None,
+        engine: Any = None) -> dict[str, Any]:  # fmt: skip
     """Run the study into ``out``; returns a summary (rows, breakdown, seconds). ``jobs``:
     families traced at once, each in its own process (default: one per core); the rows come
     out in FAMILIES' order whatever the order they finish in, and each family's rays are its
-    own seed's (study/run.py run_family()), so the outputs do not depend on ``jobs``."""
+    own seed's (study/run.py run_family()), so the outputs do not depend on ``jobs``.
+    ``engine`` (tracer.batch.Engine: --workers, --scheduler): each family a task of the batch
+    layer instead, its shard kept in out/shards/ (an interrupted run, run again, traces only
+    the families that did not finish); the outputs are the same bytes."""
     from tracer.image import atomic_path
 
     families = [family_named(family)] if family else list(FAMILIES.values())
@@ -235,7 +285,10 @@ def run(out: Path, quick: bool = False, family: str | None = None,
     rows: list[dict[str, Any]] = []
     failures: list[dict[str, Any]] = []
     seconds: dict[str, float] = {}
-    if jobs == 1:
+    if engine is not None:
+        done = iter(_batched(families, out, quick, include_mitsuba, engine))
+        jobs = 1
+    elif jobs == 1:
         done = (_family_job(f.name, quick, include_mitsuba) for f in families)
     else:
         # "spawn": a fresh interpreter per worker (Dr.Jit's and Embree's threads do not survive

@@ -32,13 +32,13 @@ def pytest_unconfigure(config: pytest.Config) -> None:
 
 
 # Modules whose module-scoped fixtures cost many seconds (tests/reports: grades, a site, a
-# browser: 8 to 35 s each; tests/study: the quick study, 20-35 s; the executed notebook, 10 s):
-# under `--dist loadgroup` (the Makefile's) each runs whole on one worker, so that its fixtures
-# are set up once, not once per worker; every other test is its own unit, handed to whichever
-# worker is free (at most three waiting on each). pytest-xdist 3.8's own loadgroup marks a group by renaming the
-# test's nodeid, which pytest 9 no longer lets it do (every test stays alone), so the units
-# are given here, by module.
-GROUPED = ("tests/reports/", "tests/study/", "tests/tracer/test_notebook.py")
+# browser: 8 to 35 s each; tests/study: the quick study, 20-35 s; tests/batch: one LocalCluster;
+# the executed notebook, 10 s): under `--dist loadgroup` (the Makefile's) each runs whole on one
+# worker, so that its fixtures are set up once, not once per worker; every other test is its own
+# unit, handed to whichever worker is free (at most three waiting on each). pytest-xdist 3.8's
+# own loadgroup marks a group by renaming the test's nodeid, which pytest 9 no longer lets it do
+# (every test stays alone), so the units are given here, by module.
+GROUPED = ("tests/reports/", "tests/study/", "tests/batch/", "tests/tracer/test_notebook.py")
 
 
 @pytest.hookimpl(optionalhook=True)  # pytest-xdist's hook: `-p no:xdist` runs have none

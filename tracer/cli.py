@@ -216,7 +216,10 @@ def cmd_bench(args: argparse.Namespace) -> None:
             f"bench: unknown suite {args.suite!r}{suggest(args.suite, [*SUITES, 'all'])}; "
             f"expected all or {', '.join(SUITES)}"
         )
-    rows = run_suites(names, args.json)
+    from tracer.batch import Engine
+
+    engine = Engine(args.workers, args.scheduler) if args.workers or args.scheduler else None
+    rows = run_suites(names, args.json, engine)  # engine: the convergence suite's (a case a task)
     print(format_ratios(rows))
     if args.json:
         print(f"rows in {args.json}")
@@ -292,6 +295,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("suite", help="a suite name (classic) or all")
     p.add_argument("--json", help="write the rows here")
     p.add_argument("--markdown", help="write the figures as a Markdown table here (the README's)")
+    from tracer.batch import add_engine_arguments  # convergence: each case a Dask task
+
+    add_engine_arguments(p, default_serial=True, zero="no Dask")
     p.set_defaults(func=cmd_bench)
 
     p = sub.add_parser("check", help="validate a scene file without rendering")
