@@ -912,10 +912,10 @@ def grade_into(
     when grading finished. Returns what the class summary needs: the score, the diagnosis's
     first line, the faults; ``status`` "failed" when the submission crashed, hung, flooded,
     ran out of memory or did not compile (its results.json says so, as for one submission)."""
-    from tracer.batch import staged_dir
+    from reports.site import staged
 
     target = Path(out)
-    with staged_dir(target) as stage:
+    with staged(target) as stage:
         result = grade(Path(submission), lesson, public=public, scenes=scenes, artifacts=stage)
         result.write(stage / "results.json", timing=False)
     faults: dict[str, int] = {}

@@ -34,10 +34,8 @@ import hashlib
 import json
 import os
 import secrets
-import shutil
 import socket
 import sys
-import tempfile
 import time
 import traceback
 from collections.abc import Callable, Iterable, Iterator, Sequence
@@ -124,37 +122,13 @@ def sources_digest(root: Path, patterns: Sequence[str]) -> str:
 
 
 def write_atomic(path: Path, text: str) -> None:
-    """``text`` into ``path`` through a temporary file beside it, renamed over it."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
+    """``text`` into ``path`` through a temporary file beside it, renamed over it; readable by
+    every user (a cluster's workers and its scheduler may run as different users)."""
+    from tracer.image import atomic_path
+
+    with atomic_path(path) as tmp:
+        tmp.write_text(text)
         os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
-        raise
-
-
-@contextlib.contextmanager
-def staged_dir(target: Path) -> Iterator[Path]:
-    """A temporary directory beside ``target`` that replaces it whole on success (the old one
-    renamed aside, then removed); on failure it is removed and ``target`` stays as it was."""
-    target.parent.mkdir(parents=True, exist_ok=True)
-    stage = Path(tempfile.mkdtemp(prefix=f".{target.name}.tmp-", dir=target.parent))
-    try:
-        yield stage
-    except BaseException:
-        shutil.rmtree(stage, ignore_errors=True)
-        raise
-    os.chmod(stage, 0o755)
-    aside = target.parent / f".{target.name}.old-{secrets.token_hex(4)}"
-    with contextlib.suppress(FileNotFoundError):
-        os.rename(target, aside)
-    os.rename(stage, target)
-    shutil.rmtree(aside, ignore_errors=True)
 
 
 def finished(task: Task) -> dict[str, Any] | None:
