@@ -276,6 +276,8 @@ SUITES: dict[str, Callable[..., list[dict[str, Any]]]] = {
     "convergence": suite_convergence,
     "grading": lambda: __import__("lessons.bench").bench.suite_grading(),  # lessons/bench.py
     "report": lambda: __import__("reports.bench").bench.suite_report(),  # reports/bench.py
+    # tracer/viewer/bench.py: rtlab view's frames through a WebSocket client at 1920x1024
+    "viewer": lambda: __import__("tracer.viewer.bench").viewer.bench.suite_viewer(),
 }
 
 

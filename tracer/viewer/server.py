@@ -27,6 +27,7 @@ import tempfile
 import time
 import traceback
 from collections import deque
+from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
@@ -460,4 +461,49 @@ def serve(
     try:
         asyncio.run(main())
     finally:
+        viewer.close()
+
+
+@contextlib.contextmanager
+def running(
+    path: str | Path, host: str = "127.0.0.1", threads: int | None = None
+) -> Iterator[tuple[Viewer, int]]:
+    """The server on a free port in a thread of this process, with its own event loop, until
+    the block ends: what ``rtlab bench viewer`` and the tests drive. Yields (viewer, port)."""
+    import threading
+
+    viewer = Viewer(path, threads)
+    loop = asyncio.new_event_loop()
+    ready: list[Any] = []
+    started = threading.Event()
+
+    def run() -> None:
+        asyncio.set_event_loop(loop)
+        try:
+            ready.append(loop.run_until_complete(start(viewer, host, 0)))
+        except BaseException as exc:
+            ready.append(exc)
+            started.set()
+            return
+        started.set()
+        loop.run_forever()
+        server, _, watch = ready[0]
+        watch.stop()
+        server.stop()
+        for s in list(viewer.sockets):
+            s.close()
+            s.task.cancel()
+        loop.run_until_complete(asyncio.sleep(0.05))
+        loop.close()
+
+    thread = threading.Thread(target=run, name="rtlab-view-server", daemon=True)
+    thread.start()
+    started.wait()
+    if isinstance(ready[0], BaseException):
+        raise ready[0]
+    try:
+        yield viewer, ready[0][1]
+    finally:
+        loop.call_soon_threadsafe(loop.stop)
+        thread.join(10)
         viewer.close()
