@@ -64,8 +64,9 @@ def orbit(view: View, yaw: float, pitch: float) -> View:
     target = max(POLE_MARGIN, min(math.pi - POLE_MARGIN, polar - pitch))
     right = np.cross(up, offset)  # horizontal, perpendicular to the offset
     if np.linalg.norm(right) > 0:
-        # Rotating about up x offset by +a moves the offset towards up: the polar angle drops.
-        offset = _rotate(offset, right / np.linalg.norm(right), polar - target)
+        # Rotating about up x offset by +a moves the offset away from up (Rodrigues: the
+        # term (k x v) sin a, with (up x v) x v pointing down): the polar angle grows by a.
+        offset = _rotate(offset, right / np.linalg.norm(right), target - polar)
     return View(_tuple(centre + offset), view.look_at, view.up)
 
 
