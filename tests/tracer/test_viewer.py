@@ -279,3 +279,29 @@ def test_a_failed_render_and_bad_messages_leave_the_server_running(tmp_path):
     assert "factor must be a finite number" in message_error["message"]
     assert "size must be one of 96x64" in size_error["message"]
     assert (pair["width"], pair["height"], pair["mode"]) == (96, 64, "depth")
+
+
+def test_compare_renders_the_references_for_the_current_camera(tmp_path):
+    path, _ = _scene(tmp_path, width=64, height=48)
+
+    async def script(c, viewer):
+        await c.next(is_frame)
+        await c.send(type="orbit", yaw=0.4, pitch=0.1)
+        moved = await c.next(lambda m: is_frame(m) and m["pass"] == 0 and m["frame"] > 1)
+        await c.send(type="compare")
+        running = await c.next(lambda m: m.get("type") == "compare")
+        done = await c.next(lambda m: m.get("type") == "compare", timeout=120)
+        return moved, running, done
+
+    moved, running, done = drive(path, script, threads=2)
+    assert running["status"] == "running"
+    assert done["status"] == "done", done
+    rows = {r["renderer"]: r for r in done["rows"]}
+    assert set(rows) >= {"rtlab", "povray"} and any(k.startswith("mitsuba") for k in rows)
+    for name, r in rows.items():
+        if name != "rtlab":
+            # The classic model at 1 spp: the references agree with rtlab for this camera.
+            assert r["agrees"] is True, r["verdict"]
+            assert r["heat_map"].startswith("data:image/png;base64,")
+    assert done["size"] == [64, 48]
+    assert done["camera"]["eye"] == moved["camera"]["eye"]  # the view's camera, not the file's

@@ -400,6 +400,7 @@ def compare_view(scene: Scene, state: ViewState, threads: int | None) -> dict[st
         "status": "done",
         "rows": _jsonable(shown),
         "size": [framed.camera.width, framed.camera.height],
+        "camera": {"eye": list(framed.camera.eye), "look_at": list(framed.camera.look_at)},
     }
 
 
