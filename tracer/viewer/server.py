@@ -92,6 +92,7 @@ class Viewer:
         self.error: dict[str, Any] | None = None
         self.threads = threads
         self.sockets: set[FrameSocket] = set()
+        self.tasks: set[asyncio.Future[None]] = set()  # the views' render loops
         self.render_pool = ThreadPoolExecutor(1, thread_name_prefix="rtlab-render")
         self.compare_pool = ThreadPoolExecutor(1, thread_name_prefix="rtlab-compare")
         self.load_pool = ThreadPoolExecutor(1, thread_name_prefix="rtlab-load")
@@ -205,6 +206,8 @@ class FrameSocket(tornado.websocket.WebSocketHandler):
             self.send_json(self.viewer.error)
         self.changed.set()
         self.task = asyncio.ensure_future(self.run())
+        self.viewer.tasks.add(self.task)
+        self.task.add_done_callback(self.viewer.tasks.discard)
 
     def hello(self) -> dict[str, Any]:
         c = self.viewer.scene.camera
@@ -493,7 +496,8 @@ def running(
         server.stop()
         for s in list(viewer.sockets):
             s.close()
-            s.task.cancel()
+        for task in list(viewer.tasks):
+            task.cancel()
         loop.run_until_complete(asyncio.sleep(0.05))
         loop.close()
 

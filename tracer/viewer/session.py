@@ -268,6 +268,7 @@ class FrameMaker:
         self.threads = threads or default_threads()
         self._core: Any = None
         self._core_of: Scene | None = None
+        self._first: npt.NDArray[np.float32] | None = None
         self._sum: npt.NDArray[np.float64] | None = None
         self._summed = 0  # passes in _sum
         self._rays: dict[str, int] = {}
@@ -290,18 +291,28 @@ class FrameMaker:
         _set_render(self._core, framed)
         result: RenderResult = _render_core(framed, self._core, self.threads, False, True)
         render_s = time.perf_counter() - start
+        # "encode" is everything between the render and the bytes: averaging the passes, the
+        # display curve, compressing.
+        start = time.perf_counter()
         image = result.image
         first_jittered = classic_refine and pass_index == 1 and base_spp == 1
         if pass_index == 0 or first_jittered:
-            self._sum, self._summed, self._rays, self._spp = None, 0, {}, 0
+            self._first, self._sum, self._summed, self._rays, self._spp = None, None, 0, {}, 0
         if state.mode in ("classic", "path") and target_passes(scene, state) > 1:
-            self._sum = image.astype(np.float64) if self._sum is None else self._sum + image
+            # The first pass is shown as it is and kept; the float64 sum starts with the second.
+            if self._summed == 0:
+                self._first = image
+            elif self._sum is None:
+                assert self._first is not None
+                self._sum = self._first.astype(np.float64) + image
+            else:
+                self._sum += image
             self._summed += 1
-            image = (self._sum / self._summed).astype(np.float32)
+            if self._sum is not None:
+                image = (self._sum / self._summed).astype(np.float32)
         for k, v in result.rays.items():
             self._rays[k] = self._rays.get(k, 0) + v
         self._spp += spp
-        start = time.perf_counter()
         data = encode(to_display(image, state.mode), state.format)
         encode_s = time.perf_counter() - start
         rays = sum(result.rays.get(k, 0) for k in ("primary", "secondary", "shadow"))
