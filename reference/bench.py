@@ -283,6 +283,8 @@ SUITES: dict[str, Callable[..., list[dict[str, Any]]]] = {
     "grading": lambda: __import__("lessons.bench").bench.suite_grading(),  # lessons/bench.py
     "report": lambda: __import__("reports.bench").bench.suite_report(),  # reports/bench.py
     "batch": lambda: __import__("reference.bench_batch").bench_batch.suite_batch(),  # Dask
+    # tracer/viewer/bench.py: rtlab view's frames through a WebSocket client at 1920x1024
+    "viewer": lambda: __import__("tracer.viewer.bench").viewer.bench.suite_viewer(),
 }
 
 

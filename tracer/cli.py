@@ -233,6 +233,18 @@ def cmd_bench(args: argparse.Namespace) -> None:
         print(f"table in {args.markdown}")
 
 
+def cmd_view(args: argparse.Namespace) -> int:
+    from tracer.viewer.server import serve
+
+    try:
+        serve(args.scene, args.host, args.port, not args.no_browser, args.threads)
+    except KeyboardInterrupt:  # Ctrl-C is how a viewer stops: not a failure
+        print("rtlab view: stopped", file=sys.stderr)
+    except OSError as exc:  # the port is taken, the address is not this machine's
+        raise UsageError(f"view: cannot listen on {args.host}:{args.port}: {exc}") from exc
+    return 0
+
+
 def cmd_check(args: argparse.Namespace) -> None:
     scene = load_scene(args.scene)
     print(
@@ -299,6 +311,14 @@ def build_parser() -> argparse.ArgumentParser:
 
     add_engine_arguments(p, default_serial=True, zero="no Dask")
     p.set_defaults(func=cmd_bench)
+
+    p = sub.add_parser("view", help="a live view of a scene in the browser (mouse, keys, panel)")
+    p.add_argument("scene", help="scene file (TOML); saving it re-renders")
+    p.add_argument("--port", type=int, default=8765, help="port (default 8765; 0: a free one)")
+    p.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1)")
+    p.add_argument("--no-browser", action="store_true", help="do not open a browser")
+    p.add_argument("--threads", type=_positive_int, help="render threads (default: all cores)")
+    p.set_defaults(func=cmd_view)
 
     p = sub.add_parser("check", help="validate a scene file without rendering")
     p.add_argument("scene", help="scene file (TOML)")
