@@ -38,23 +38,6 @@ AOV_VIEWS = ("normal", "depth", "object_id")
 # is meant in, as POV-Ray and Mitsuba's rgb variants read them.
 _LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 
-# Distinct colours for object ids (matplotlib's "tab10"), repeated past ten objects.
-_ID_COLOURS = np.array(
-    [
-        [31, 119, 180],
-        [255, 127, 14],
-        [44, 160, 44],
-        [214, 39, 40],
-        [148, 103, 189],
-        [140, 86, 75],
-        [227, 119, 194],
-        [127, 127, 127],
-        [188, 189, 34],
-        [23, 190, 207],
-    ],
-    dtype=np.uint8,
-)
-
 
 class Picture:
     """An 8-bit sRGB image of shape (height, width, 3) ready to be looked at: Jupyter shows it
@@ -112,25 +95,30 @@ def tone_map(
 
 
 def aov_view(image: npt.ArrayLike, channel: str = "normal") -> npt.NDArray[np.uint8]:
-    """One channel of an aov render (tracer.render.AOV_CHANNELS) as colours."""
+    """One channel of an aov render (tracer.render.AOV_CHANNELS) as colours (the notebook's and
+    ``rtlab view``'s)."""
     _check_choice("channel", channel, AOV_VIEWS)
     aov = np.asarray(image, dtype=np.float64)
     if aov.ndim != 3 or aov.shape[2] != 5:
         raise ValueError(f"expected an aov image of shape (height, width, 5), got {aov.shape}")
-    object_id = aov[..., 1]
-    hit = object_id >= 0
+    hit = aov[..., 1] >= 0  # object_id is -1 on a miss
     if channel == "normal":
         colours = np.where(hit[..., None], (aov[..., 2:5] + 1.0) / 2.0, 0.0)
         return np.round(np.clip(colours, 0.0, 1.0) * 255.0).astype(np.uint8)
-    if channel == "depth":
+    if channel == "depth":  # the nearest hit white, the farthest 20% grey, a miss black
         depth = aov[..., 0]
         finite = hit & np.isfinite(depth)
-        far = float(depth[finite].max()) if finite.any() else 1.0
-        near_bright = np.where(finite, 1.0 - depth / (far if far > 0 else 1.0) * 0.9, 0.0)
-        grey = np.round(np.clip(near_bright, 0.0, 1.0) * 255.0).astype(np.uint8)
-        return np.repeat(grey[..., None], 3, axis=2)
-    colours = _ID_COLOURS[np.where(hit, object_id, 0).astype(np.int64) % len(_ID_COLOURS)]
-    return np.where(hit[..., None], colours, 0).astype(np.uint8)
+        grey = np.zeros(depth.shape)
+        if finite.any():
+            near, far = float(depth[finite].min()), float(depth[finite].max())
+            grey[finite] = 1.0 - 0.8 * (depth[finite] - near) / max(far - near, 1e-12)
+        return np.repeat(np.round(grey * 255.0).astype(np.uint8)[..., None], 3, axis=2)
+    # A hue per object, stepped by the golden ratio's fraction of the circle, so that any two
+    # neighbouring indices (and any number of objects) look apart.
+    ids = np.where(hit, aov[..., 1], 0).astype(np.int64)
+    hue = (ids * 0.6180339887) % 1.0
+    rgb = 0.55 + 0.45 * np.cos(2 * np.pi * (hue[..., None] + np.array([0.0, 1 / 3, 2 / 3])))
+    return np.where(hit[..., None], np.round(rgb * 255.0), 0).astype(np.uint8)
 
 
 def picture(
