@@ -345,7 +345,11 @@ def core_integrator(scene: Scene, packets: bool = True) -> _core.Integrator:
 
 
 def _render_core(
-    scene: Scene, core: _core.Scene, threads: int, progress: bool | None, packets: bool
+    scene: Scene,
+    core: _core.Scene,
+    threads: int,
+    progress: bool | ProgressCallback | None,
+    packets: bool,
 ) -> RenderResult:
     """Render a core scene already built from ``scene`` (its hierarchies included): a stereo
     pair eye by eye, the core's camera set to each in turn, then composed."""
@@ -378,14 +382,24 @@ def _render_core(
 
 
 def _render_camera(
-    scene: Scene, core: _core.Scene, threads: int, progress: bool | None, packets: bool
+    scene: Scene,
+    core: _core.Scene,
+    threads: int,
+    progress: bool | ProgressCallback | None,
+    packets: bool,
 ) -> RenderResult:
-    """Render the core scene through the camera it has now."""
+    """Render the core scene through the camera it has now. ``progress``: a bar (True; None:
+    on a terminal), none (False), or a callback of (done, total) whose exception cancels the
+    render and is raised here (``rtlab view`` drops a refinement pass a move has made stale)."""
     if scene.camera.stereo is None:  # a stereo pair's eyes were counted together
         check_memory(scene)
     if progress is None:
         progress = sys.stderr.isatty()
-    callback, close = _progress_bar() if progress else (None, lambda: None)
+    callback: ProgressCallback | None
+    if callable(progress):
+        callback, close = progress, lambda: None
+    else:
+        callback, close = _progress_bar() if progress else (None, lambda: None)
     start = time.perf_counter()
     try:
         image, rays, ran = _core.render(

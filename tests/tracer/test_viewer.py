@@ -305,3 +305,32 @@ def test_compare_renders_the_references_for_the_current_camera(tmp_path):
             assert r["heat_map"].startswith("data:image/png;base64,")
     assert done["size"] == [64, 48]
     assert done["camera"]["eye"] == moved["camera"]["eye"]  # the view's camera, not the file's
+
+
+def test_a_stale_refinement_pass_is_given_up_and_a_first_pass_never(tmp_path):
+    """The core cancels a render whose progress callback raises (bindings.cpp render()); the
+    viewer's callback raises once the view has moved on, for refinement passes only."""
+    from tracer.scene import load_scene
+    from tracer.viewer.session import FrameMaker, Superseded
+
+    path, _ = _scene(tmp_path)
+    scene = load_scene(path)
+    state = ViewState.of(scene)
+    maker = FrameMaker(threads=1)
+    asked = []
+
+    def stale():
+        asked.append(True)
+        return True
+
+    first = maker.make(scene, state, 0, 1, stale)  # a new view's first pass always finishes
+    assert first.header["pass"] == 0 and not asked
+    with pytest.raises(Superseded):
+        maker.make(scene, state, 1, 2, stale)
+    assert asked
+    # Not stale: the pass renders (classic's first jittered pass starts the average afresh: its
+    # 4 samples replace the pixel centres); a stale pass after it leaves no samples behind.
+    assert maker.make(scene, state, 1, 3, lambda: False).header["spp"] == 4
+    with pytest.raises(Superseded):
+        maker.make(scene, state, 2, 4, stale)
+    assert maker.make(scene, state, 2, 5, lambda: False).header["spp"] == 8

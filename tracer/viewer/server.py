@@ -20,6 +20,7 @@ from __future__ import annotations
 import asyncio
 import base64
 import contextlib
+import functools
 import json
 import struct
 import sys
@@ -45,6 +46,7 @@ from tracer.viewer.session import (
     STEREO_MODES,
     FrameMaker,
     MessageError,
+    Superseded,
     ViewState,
     apply,
     frame_scene,
@@ -201,6 +203,7 @@ class FrameSocket(tornado.websocket.WebSocketHandler):
         self.started_at: dict[int, float] = {}
         self.e2e: deque[float] = deque(maxlen=5)
         self.comparing = False
+        self.superseded = 0  # refinement passes given up for a move (tests read it)
         # Frames and acks are latency, not bandwidth: with Nagle's algorithm a small message
         # written while an earlier one is unacknowledged waits for the peer's delayed ACK
         # (40 ms on Linux), which is a quarter of a 1920x1024 frame's time.
@@ -304,8 +307,18 @@ class FrameSocket(tornado.websocket.WebSocketHandler):
             self.started_at[number] = time.perf_counter()
             try:
                 frame = await loop.run_in_executor(
-                    self.viewer.render_pool, self.maker.make, scene, state, pass_index, number
+                    self.viewer.render_pool,
+                    self.maker.make,
+                    scene,
+                    state,
+                    pass_index,
+                    number,
+                    functools.partial(self.stale, state.key(), version),
                 )
+            except Superseded:  # a move came during a refinement pass: render the move now
+                self.started_at.pop(number, None)
+                self.superseded += 1
+                continue
             except Exception as exc:  # a render error: shown, the last image kept
                 self.started_at.pop(number, None)
                 last_key, last_version = state.key(), version
@@ -329,6 +342,10 @@ class FrameSocket(tornado.websocket.WebSocketHandler):
                 break
             with contextlib.suppress(TimeoutError):
                 await asyncio.wait_for(self.acked.wait(), ACK_TIMEOUT)
+
+    def stale(self, key: tuple[Any, ...], version: int) -> bool:
+        """Whether the view rendering as (``key``, scene ``version``) has moved on since."""
+        return self.state.key() != key or self.viewer.version != version
 
     def start_compare(self) -> None:
         if self.comparing:

@@ -17,6 +17,7 @@ import dataclasses
 import io
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -237,6 +238,10 @@ def target_passes(scene: Scene, state: ViewState) -> int:
     return 1 + CLASSIC_PASSES  # the centre-sampled (or scene-spp) frame, then jittered passes
 
 
+class Superseded(Exception):
+    """A refinement pass given up because the view it refines has changed."""
+
+
 @dataclass
 class Frame:
     header: dict[str, Any]
@@ -258,8 +263,19 @@ class FrameMaker:
         self._rays: dict[str, int] = {}
         self._spp = 0
 
-    def make(self, scene: Scene, state: ViewState, pass_index: int, number: int) -> Frame:
-        """Pass ``pass_index`` of the view ``state`` (0: a new view; the running sum restarts)."""
+    def make(
+        self,
+        scene: Scene,
+        state: ViewState,
+        pass_index: int,
+        number: int,
+        stale: Callable[[], bool] | None = None,
+    ) -> Frame:
+        """Pass ``pass_index`` of the view ``state`` (0: a new view; the running sum restarts).
+        A refinement pass (``pass_index`` > 0) is given up, raising :class:`Superseded`, as soon
+        as ``stale()`` says the view has moved on: at 1920x1024 a pass takes a quarter second,
+        which a move would otherwise wait out. A new view's first pass always finishes, or a
+        steady drag would never show a frame."""
         base_spp = scene.render.spp
         classic_refine = state.mode == "classic" and pass_index > 0
         spp = ANTIALIAS_SPP if classic_refine and base_spp == 1 else base_spp
@@ -273,7 +289,14 @@ class FrameMaker:
         eyes = framed.camera.stereo
         _set_camera(self._core, framed, "left" if eyes is not None else None)
         _set_render(self._core, framed)
-        result: RenderResult = _render_core(framed, self._core, self.threads, False, True)
+        progress: Callable[[int, int], None] | bool = False
+        if stale is not None and pass_index > 0:
+
+            def progress(done: int, total: int) -> None:
+                if stale():
+                    raise Superseded
+
+        result: RenderResult = _render_core(framed, self._core, self.threads, progress, True)
         render_s = time.perf_counter() - start
         # "encode" is everything between the render and the bytes: averaging the passes, the
         # display curve, compressing.
