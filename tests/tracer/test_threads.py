@@ -111,3 +111,18 @@ def test_import_tracer_keeps_blas_to_one_thread_unless_the_user_chose():
     assert _blas_env_after_import({"OMP_NUM_THREADS": "2"}, "tracer")[0] == "-"
     blas, threads = _blas_env_after_import({}, "numpy, tracer")
     assert blas == "-" and (threads > 1 or (os.cpu_count() or 1) == 1)
+
+
+def test_a_reused_image_buffer_never_changes_a_live_image():
+    """bindings.cpp keeps the last image freed for the next render of its size: an image still
+    held must not be written by the next render, and a reused buffer's old pixels never show."""
+    scene = tracer.load_scene(SCENE).with_overrides(width=97, height=61, spp=1)
+    first = tracer.render(scene, threads=2)
+    kept = first.copy()
+    other = tracer.render(scene.with_overrides(spp=3, seed=5), threads=2)  # same size
+    assert not np.array_equal(other, kept)  # so an overwrite of `first` would show
+    assert np.array_equal(first, kept)
+    del first, other  # both buffers freed: the next render of this size reuses one
+    assert np.array_equal(tracer.render(scene, threads=2), kept)
+    small = scene.with_overrides(width=33, height=17)
+    assert tracer.render(small, threads=2).shape == (17, 33, 3)  # another size: a fresh one
