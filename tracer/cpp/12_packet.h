@@ -455,9 +455,13 @@ inline Mask trace_level(const Scene &scene, RayL &ray, Mask active, Lanes &coef,
         add_where(lit, local, (m_color * lc) * (diffuse * NL));
         Mask highlight = lit & (specular != 0);
         if (any(highlight)) {
+            // Where R.L <= 0 the one-ray code adds (specular 0) light.color, +0 to a sum of
+            // products of finite non-negative numbers (the scene reader takes finite values
+            // only): nothing. So power() runs only when some lane has a highlight.
             Lanes cos_alpha = dot(R, L);
-            Lanes phong = select(cos_alpha > 0, power(cos_alpha, shininess), splat(0.0));
-            add_where(highlight, local, lc * (specular * phong));
+            highlight &= cos_alpha > 0;
+            if (any(highlight))
+                add_where(highlight, local, lc * (specular * power(cos_alpha, shininess)));
         }
     }
     add_where(active, color, local * coef);
