@@ -126,3 +126,14 @@ def test_a_reused_image_buffer_never_changes_a_live_image():
     assert np.array_equal(tracer.render(scene, threads=2), kept)
     small = scene.with_overrides(width=33, height=17)
     assert tracer.render(small, threads=2).shape == (17, 33, 3)  # another size: a fresh one
+
+
+def test_the_convergence_suite_times_the_path_tracer_on_one_and_two_threads():
+    """reference/bench.py cornell_scaling(): rows that thread_scaling() pairs (one case and
+    metric, threads 1 and 2), so the convergence suite prints its gain from the second thread."""
+    from reference.bench import cornell_scaling, thread_scaling
+
+    rows = cornell_scaling(sizes=(8,), spp=2, repeats=1)
+    assert sorted(r["threads"] for r in rows) == [1, 2]
+    assert all(r["value"] > 0 and r["unit"] == "s" for r in rows)
+    assert list(thread_scaling(rows)) == [("", "cornell_box-8x8-2spp", "rtlab")]
