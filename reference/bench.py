@@ -273,6 +273,28 @@ def suite_convergence(
         print(summary(made))
         print(f"plot: {path}")
         rows += made
+    return rows + cornell_scaling()
+
+
+def cornell_scaling(
+    sizes: tuple[int, ...] = (64, 128), spp: int = 64, repeats: int = 3
+) -> list[dict[str, Any]]:
+    """The convergence rows are timed on every core; these time rtlab's Cornell box path
+    tracer on 1 and 2 threads (one spp, the best of `repeats` interleaved renders), so that the
+    suite's gain from the second thread can be read like the others'."""
+    scene = load_scene(Path(__file__).resolve().parent / "scenes" / "cornell_box.toml")
+    rows = []
+    for size in sizes:
+        sized = scene.with_overrides(width=size, height=size, spp=spp)
+        best: dict[int, float] = {}
+        for _ in range(repeats):
+            for n in (1, 2):
+                seconds = render_with_stats(sized, threads=n, progress=False).seconds
+                best[n] = min(best.get(n, seconds), seconds)
+        for n, value in best.items():
+            rows.append({"case": f"cornell_box-{size}x{size}-{spp}spp", "renderer": "rtlab",
+                         "threads": n, "metric": "seconds", "value": value, "unit": "s",
+                         "repeats": repeats})  # fmt: skip
     return rows
 
 

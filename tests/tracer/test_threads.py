@@ -79,3 +79,61 @@ def test_render_releases_the_gil():
         sys.setswitchinterval(interval)
     assert len(seen) >= 3, f"the render took too few polls to tell ({len(seen)})"
     assert seen[-1] > seen[0], f"no Python ran while the core rendered: {seen}"
+
+
+def _blas_env_after_import(env: dict[str, str], first: str) -> tuple[str, int]:
+    """In a fresh interpreter: import `first`, then numpy; OPENBLAS_NUM_THREADS as it is then,
+    and how many threads the process has (OpenBLAS starts one per extra BLAS thread)."""
+    import os
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if not k.endswith("_NUM_THREADS")} | env
+    code = (f"import {first}, numpy, os; print(os.environ.get('OPENBLAS_NUM_THREADS', '-'),"
+            " len(os.listdir('/proc/self/task')))")  # fmt: skip
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                         text=True, check=True).stdout.split()  # fmt: skip
+    return out[0], int(out[1])
+
+
+def test_import_tracer_keeps_blas_to_one_thread_unless_the_user_chose():
+    """tracer/__init__.py: OpenBLAS's spinning workers would take the cores a render needs."""
+    import os
+
+    if not os.path.isdir("/proc/self/task"):
+        import pytest
+
+        pytest.skip("counts threads through Linux's /proc")
+    assert _blas_env_after_import({}, "tracer") == ("1", 1)
+    # The user's choice wins, and so (a check that OpenBLAS does start workers, so that the
+    # count above could have been larger) does numpy imported before tracer.
+    assert _blas_env_after_import({"OPENBLAS_NUM_THREADS": "2"}, "tracer") == ("2", 2)
+    assert _blas_env_after_import({"OMP_NUM_THREADS": "2"}, "tracer")[0] == "-"
+    blas, threads = _blas_env_after_import({}, "numpy, tracer")
+    assert blas == "-" and (threads > 1 or (os.cpu_count() or 1) == 1)
+
+
+def test_a_reused_image_buffer_never_changes_a_live_image():
+    """bindings.cpp keeps the last image freed for the next render of its size: an image still
+    held must not be written by the next render, and a reused buffer's old pixels never show."""
+    scene = tracer.load_scene(SCENE).with_overrides(width=97, height=61, spp=1)
+    first = tracer.render(scene, threads=2)
+    kept = first.copy()
+    other = tracer.render(scene.with_overrides(spp=3, seed=5), threads=2)  # same size
+    assert not np.array_equal(other, kept)  # so an overwrite of `first` would show
+    assert np.array_equal(first, kept)
+    del first, other  # both buffers freed: the next render of this size reuses one
+    assert np.array_equal(tracer.render(scene, threads=2), kept)
+    small = scene.with_overrides(width=33, height=17)
+    assert tracer.render(small, threads=2).shape == (17, 33, 3)  # another size: a fresh one
+
+
+def test_the_convergence_suite_times_the_path_tracer_on_one_and_two_threads():
+    """reference/bench.py cornell_scaling(): rows that thread_scaling() pairs (one case and
+    metric, threads 1 and 2), so the convergence suite prints its gain from the second thread."""
+    from reference.bench import cornell_scaling, thread_scaling
+
+    rows = cornell_scaling(sizes=(8,), spp=2, repeats=1)
+    assert sorted(r["threads"] for r in rows) == [1, 2]
+    assert all(r["value"] > 0 and r["unit"] == "s" for r in rows)
+    assert list(thread_scaling(rows)) == [("", "cornell_box-8x8-2spp", "rtlab")]

@@ -455,9 +455,13 @@ inline Mask trace_level(const Scene &scene, RayL &ray, Mask active, Lanes &coef,
         add_where(lit, local, (m_color * lc) * (diffuse * NL));
         Mask highlight = lit & (specular != 0);
         if (any(highlight)) {
+            // Where R.L <= 0 the one-ray code adds (specular 0) light.color, +0 to a sum of
+            // products of finite non-negative numbers (the scene reader takes finite values
+            // only): nothing. So power() runs only when some lane has a highlight.
             Lanes cos_alpha = dot(R, L);
-            Lanes phong = select(cos_alpha > 0, power(cos_alpha, shininess), splat(0.0));
-            add_where(highlight, local, lc * (specular * phong));
+            highlight &= cos_alpha > 0;
+            if (any(highlight))
+                add_where(highlight, local, lc * (specular * power(cos_alpha, shininess)));
         }
     }
     add_where(active, color, local * coef);
@@ -508,6 +512,24 @@ inline RayL primary_rays(const Camera &cam, int i0, int j) {
     // END SOLUTION
 }
 
+// primary_rays() in two steps, for a tile's rows: the direction's part that depends on the
+// column only, forward + right (x plane_width + window_shift), is the same in every row, so a
+// tile computes it once per packet of columns (its division by the width, its conversions and
+// its multiplications were a tenth of Ex 25's time, perf, issue 12); each row adds its
+// true_up (y plane_height) and normalises. The same operations in the same order as
+// primary_rays(), so the same bits (tests/tracer/test_packet.py).
+inline Vec3L primary_across(const Camera &cam, int i0) {
+    Lanes sx;
+    for (int k = 0; k < rays_per_packet; ++k) sx[k] = (i0 + k) + 0.5;
+    Lanes x = sx / double(cam.width) - 0.5;
+    return splat(cam.forward) + splat(cam.right) * (x * cam.plane_width + cam.window_shift);
+}
+inline RayL primary_rays(const Camera &cam, const Vec3L &across, int j) {
+    double y = 0.5 - (j + 0.5) / cam.height;
+    Vec3L d = across + splat(cam.true_up * (y * cam.plane_height));
+    return {splat(cam.eye), normalize(d)};
+}
+
 inline void store_pixels(float *out, int width, int i0, int j, int n, const ColorL &c) {
     float *px = out + (size_t(j) * width + i0) * 3;
     for (int k = 0; k < n; ++k, px += 3)
@@ -520,14 +542,19 @@ inline void render_tile_packets(const Scene &scene, int x0, int y0, int x1, int 
                                 RayCounts &counts) {
     const Camera &cam = scene.camera;
     if (scene.settings.spp == 1) { // one ray per pixel: whole packets along each row
+        constexpr int most = tile_size / rays_per_packet; // packets across the widest tile
+        Vec3L across[most];
+        for (int p = 0, i = x0; i < x1 && p < most; ++p, i += rays_per_packet)
+            across[p] = primary_across(cam, i);
         for (int j = y0; j < y1; ++j)
-            for (int i = x0; i < x1; i += rays_per_packet) {
+            for (int p = 0, i = x0; i < x1; ++p, i += rays_per_packet) {
                 const int n = std::min(rays_per_packet, x1 - i);
                 Mask active = mask_all(false);
                 for (int k = 0; k < n; ++k) active[k] = -1;
                 counts.primary += uint64_t(n);
-                store_pixels(out, cam.width, i, j, n,
-                             trace(scene, primary_rays(cam, i, j), active, counts));
+                const RayL rays = p < most ? primary_rays(cam, across[p], j)
+                                           : primary_rays(cam, i, j); // a tile wider than ours
+                store_pixels(out, cam.width, i, j, n, trace(scene, rays, active, counts));
             }
         return;
     }

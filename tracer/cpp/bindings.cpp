@@ -16,10 +16,12 @@
 #include <cstdlib>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <tuple>
+#include <unordered_map>
 
 #include "01_vec3.h"
 #include "02_ray.h"
@@ -127,13 +129,60 @@ static void fill_mesh(rt::Mesh &mesh, const Vertices &vertices, const Faces &fac
 // threads queueing on the lock of the process's memory map. Aligned to 2 MiB and marked
 // MADV_HUGEPAGE (a hint the kernel may ignore; with transparent huge pages in "madvise" mode,
 // as here, the only way to get them), it is mapped in 2 MiB pages: 20 faults.
+//
+// Even so every fresh page is zeroed by the kernel first: 24 MB for Ex 25 at 1920 x 1024, a
+// tenth of its render's time (perf, issue 12). So the last image freed is kept, one block, and
+// the next render of the same size (a benchmark's repeats, a progressive render's passes, a
+// viewer's frames) writes into it instead: every pixel is written, so what it held does not
+// matter. A render of another size frees it. At most one image's memory stays held.
+namespace {
+struct ImageCache {
+    std::mutex mutex;
+    void *spare = nullptr; // the last image freed, of spare_bytes
+    size_t spare_bytes = 0;
+    std::unordered_map<void *, size_t> live; // images handed out: their sizes
+};
+ImageCache &image_cache() {
+    static ImageCache *cache = new ImageCache; // never destroyed: capsules may outlive statics
+    return *cache;
+}
+} // namespace
+
 static float *allocate_image(size_t floats) {
     constexpr size_t huge_page = size_t(2) << 20;
     const size_t bytes = (floats * sizeof(float) + huge_page - 1) / huge_page * huge_page;
-    void *p = std::aligned_alloc(huge_page, bytes);
-    if (p == nullptr) throw std::bad_alloc();
-    madvise(p, bytes, MADV_HUGEPAGE);
+    ImageCache &cache = image_cache();
+    void *p = nullptr, *stale = nullptr;
+    {
+        std::lock_guard<std::mutex> lock(cache.mutex);
+        if (cache.spare != nullptr && cache.spare_bytes == bytes) p = cache.spare;
+        else stale = cache.spare;
+        cache.spare = nullptr;
+    }
+    std::free(stale); // free(nullptr) does nothing
+    if (p == nullptr) {
+        p = std::aligned_alloc(huge_page, bytes);
+        if (p == nullptr) throw std::bad_alloc();
+        madvise(p, bytes, MADV_HUGEPAGE);
+    }
+    std::lock_guard<std::mutex> lock(image_cache().mutex);
+    cache.live[p] = bytes;
     return static_cast<float *>(p);
+}
+
+// The capsule's deleter: keep the image as the spare, freeing the one it replaces.
+static void release_image(void *p) noexcept {
+    ImageCache &cache = image_cache();
+    void *stale = nullptr;
+    {
+        std::lock_guard<std::mutex> lock(cache.mutex);
+        auto it = cache.live.find(p);
+        stale = cache.spare;
+        cache.spare = p;
+        cache.spare_bytes = it->second;
+        cache.live.erase(it);
+    }
+    std::free(stale);
 }
 
 // Render with the GIL released. Every poll interval (11_render.h) the watching thread takes the
@@ -155,7 +204,7 @@ static std::tuple<Image, nb::dict, Integrator> render(const rt::Scene &scene, in
     const size_t channels = aov ? rt::aov_channels : 3;
     // Not zeroed: every pixel is written (a cancelled render raises instead of returning).
     float *data = allocate_image(size_t(width) * size_t(height) * channels);
-    nb::capsule owner(data, [](void *p) noexcept { std::free(p); });
+    nb::capsule owner(data, release_image);
     bool failed = false;
     rt::RenderResult result;
     {
