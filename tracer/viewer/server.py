@@ -177,6 +177,13 @@ class PageHandler(LocalOnly):
         self.write((STATIC / "index.html").read_bytes())
 
 
+class NoIcon(LocalOnly):
+    """The browser asks for /favicon.ico on its own; "no content" keeps its console clean."""
+
+    def get(self) -> None:
+        self.set_status(204)
+
+
 class StaticHandler(tornado.web.StaticFileHandler):
     def prepare(self) -> None:
         _check_host(self)
@@ -433,6 +440,7 @@ def make_app(viewer: Viewer, host: str) -> tornado.web.Application:
         [
             (r"/", PageHandler),
             (r"/ws", FrameSocket),
+            (r"/favicon.ico", NoIcon),
             (r"/static/(.*)", StaticHandler, {"path": str(STATIC)}),
         ],
         viewer=viewer,
