@@ -510,14 +510,14 @@ def _failed_all(
             lesson,
             p.concept,
             0.0,
-            points[p.concept],
+            points[i],
             "failed",
             text,
             p.visibility,
             p.function,
             kind,
         )
-        for p in probes
+        for i, p in enumerate(probes)
     ]
     tests += [
         TestResult(
@@ -525,24 +525,36 @@ def _failed_all(
             lesson,
             c.concept,
             0.0,
-            points[c.concept],
+            points[len(probes) + i],
             "failed",
             text,
             c.visibility,
             "",
             kind,
         )
-        for c in scenes
+        for i, c in enumerate(scenes)
     ]
     return tests
 
 
-def _points(probes: list[Probe], scenes: Sequence[SceneCheck] = ()) -> dict[str, float]:
-    """Each concept is worth CONCEPT_POINTS, shared among all its checks (probes and scenes)."""
-    counts: dict[str, int] = {}
-    for c in [*probes, *scenes]:
-        counts[c.concept] = counts.get(c.concept, 0) + 1
-    return {concept: CONCEPT_POINTS / n for concept, n in counts.items()}
+def _points(probes: list[Probe], scenes: Sequence[SceneCheck] = ()) -> list[float]:
+    """Each concept is worth CONCEPT_POINTS, shared among all its checks (probes and scenes):
+    the share of each check in the order [*probes, *scenes]. Scores are written to 4 decimals
+    (TestResult.to_dict), so the shares are whole ten-thousandths whose sum is the concept's
+    points exactly, the remainder going one unit each to the first checks: six checks of one
+    concept get 1.6667 four times and 1.6666 twice, 10 in all, where six of 10/6 rounded each
+    summed to 10.0002 and a full score read 50.0002 of 50.0002."""
+    unit = 10_000
+    checks = [c.concept for c in [*probes, *scenes]]
+    counts = {concept: checks.count(concept) for concept in checks}
+    seen: dict[str, int] = {}
+    shares = []
+    for concept in checks:
+        k = seen.get(concept, 0)
+        seen[concept] = k + 1
+        base, extra = divmod(round(CONCEPT_POINTS * unit), counts[concept])
+        shares.append((base + (1 if k < extra else 0)) / unit)
+    return shares
 
 
 def _scene_name(check: SceneCheck) -> str:
@@ -708,12 +720,12 @@ def grade_lesson(
         ran = run_probes(probe_build, probes, work / "build") if probe_build else {}
         rendered = render_student(ext_build, checks, work / "renders") if ext_build else []
         tests = [
-            _probe_test(p, points[p.concept], *ran.get(i, ("not_run", "not run")))
+            _probe_test(p, points[i], *ran.get(i, ("not_run", "not run")))
             for i, p in enumerate(probes)
         ]
         tests += [
-            _scene_test(c, points[c.concept], r, artifacts)
-            for c, r in zip(checks, rendered, strict=True)
+            _scene_test(c, share, r, artifacts)
+            for c, share, r in zip(checks, points[len(probes) :], rendered, strict=True)
         ]
     return tests, diagnose(lesson, tests, depends), spliced.notes
 

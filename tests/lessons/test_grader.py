@@ -260,9 +260,12 @@ def test_results_json_follows_gradescope(tmp_path: Path) -> None:
     for test in data["tests"]:
         per[test["tags"][1]] = per.get(test["tags"][1], 0) + test["max_score"]
     assert set(per) == set(get_lesson("L04").concepts)
-    # results.json rounds each test's points to 4 decimals: a concept's sum is 10 within
-    # 7 checks (probes and scenes) x 0.00005.
-    assert all(v == pytest.approx(10, abs=4e-4) for v in per.values())
+    # Each check's share is whole ten-thousandths (results.json's 4 decimals) and a concept's
+    # shares sum to its 10 points exactly: summed in ten-thousandths (integers), no float
+    # round-off can hide a unit; and the lesson's maximum is a whole 10 per concept.
+    assert all(round(v * 10_000) == 100_000 for v in per.values())
+    for test in data["tests"]:
+        assert test["max_score"] == round(test["max_score"], 4)
     assert 0 < data["score"] < sum(per.values())
 
 
