@@ -193,9 +193,46 @@ inline M4 triangle_candidates(const TriangleBlock &block, const WatertightRay &r
                                   r.Sx, r.Sy, r.Sz, range.min, range.max);
 }
 
+// The triangles of one block tested against one ray, in leaf order, as leaf_hit() tests them:
+// the block's candidates (triangle_candidates()) re-tested by intersect_triangle() itself with
+// the range shrunk by each hit. Counts each real triangle as one primitive test. Returns
+// whether one was hit; with `any`, stops at the first.
+inline bool block_hits(const TriangleBlock &block, const Mesh &mesh, const WatertightRay &wr,
+                       Interval &range, TriangleHit &best, int &best_triangle,
+                       uint64_t &primitive_tests, bool any) {
+    M4 candidates = triangle_candidates(block, wr, range);
+    bool found = false;
+    for (int l = 0; l < bvh_width; ++l) {
+        const int i = block.leaf[l];
+        if (i < 0) break;
+        ++primitive_tests;
+        if (!candidates[l]) continue;
+        // The block's own copy of leaf_vertices[3 i ...] (the same doubles): no second cache
+        // line to wait for.
+        Vec3 v[3];
+        for (int k = 0; k < 3; ++k) v[k] = {block.p[k][0][l], block.p[k][1][l], block.p[k][2][l]};
+        TriangleHit th;
+        if (intersect_triangle(v[0], v[1], v[2], wr, range, th)) {
+            best = th;
+            best_triangle = mesh.order[size_t(i)];
+            range.max = th.t;
+            found = true;
+            if (any) return true;
+        }
+    }
+    return found;
+}
+
 struct WideBVH : MeshAccelerator {
     std::vector<WideNode> nodes; // nodes[0] is the root
     std::vector<TriangleBlock> blocks;
+    // A mesh of at most flat_triangles triangles (the Cornell box's room has 10, its light 2):
+    // every triangle, in leaf order, in blocks tested one after the other without the
+    // hierarchy (search_flat()). With so few triangles the search's own set-up (the slab
+    // reciprocals, the stack, the node's four box tests) costs more than the triangles it
+    // skips: three blocks of candidate tests are cheaper than choosing which to test.
+    static constexpr size_t flat_triangles = 4 * bvh_width;
+    std::vector<TriangleBlock> flat; // empty for larger meshes
 
     // The deepest stack: a wide node lies at least one binary level below its parent, so at
     // most max_tree_depth + 1 levels; each visit takes one entry and leaves up to four.
@@ -210,6 +247,57 @@ struct WideBVH : MeshAccelerator {
             set_child(mesh, 0, 0, 0);
         } else
             collapse(mesh, 0);
+        if (mesh.order.size() <= flat_triangles)
+            for (size_t first = 0; first < mesh.order.size(); first += bvh_width)
+                flat.push_back(make_block(mesh, int(first), int(mesh.order.size())));
+    }
+
+    // Lane c of a node's boxes: `box` rounded outward to float (lanes after c: empty boxes).
+    static void set_box(WideNode &w, int c, const AABB &box) {
+        for (int axis = 0; axis < 3; ++axis) {
+            if (c == 0) // lanes without a child keep the empty box
+                for (int l = 0; l < bvh_width; ++l)
+                    w.planes[0][axis][l] = std::numeric_limits<float>::infinity(),
+                    w.planes[1][axis][l] = -std::numeric_limits<float>::infinity();
+            w.planes[0][axis][c] = float_down(box.min[axis]);
+            w.planes[1][axis][c] = float_up(box.max[axis]);
+        }
+        w.children = c + 1;
+    }
+
+    // The block of leaf-order triangles first, first + 1, ... (up to four, before `end`),
+    // padded with the all-zero triangle.
+    static TriangleBlock make_block(const Mesh &mesh, int first, int end) {
+        TriangleBlock b{};
+        for (int l = 0; l < bvh_width; ++l) {
+            const int i = first + l;
+            b.leaf[l] = i < end ? i : -1;
+            for (int v = 0; v < 3; ++v)
+                for (int axis = 0; axis < 3; ++axis)
+                    b.p[v][axis][l] =
+                        b.leaf[l] < 0 ? 0.0 : mesh.leaf_vertices[3 * size_t(i) + v][axis];
+        }
+        b.more = first + bvh_width < end;
+        return b;
+    }
+
+    // A flat mesh's answer: every block in leaf order, the ray's watertight set-up made by the
+    // caller (once for all the meshes a ray meets, CulledQueries in 20_path.h). The closest
+    // hit is the one every search finds (the smallest t that intersect_triangle() accepts);
+    // only between triangles hit at the same t may a different one be kept, as between the
+    // binary and the wide hierarchy (the top of this file). No box test: the caller has
+    // tested the mesh's root box (WorldBounds), or traverse() does. (A 4-lane slab test of the
+    // blocks' boxes first, to skip the blocks a ray misses, made the Cornell box 8 % slower.)
+    bool search_flat(const Mesh &mesh, const WatertightRay &wr, Interval range,
+                     TriangleHit &best, int &best_triangle, RayCounts &counts, bool any) const {
+        bool found = false;
+        for (const TriangleBlock &block : flat)
+            if (block_hits(block, mesh, wr, range, best, best_triangle, counts.primitive_tests,
+                           any)) {
+                found = true;
+                if (any) return true;
+            }
+        return found;
     }
 
     // A wide node in place of the binary inner node `binary`: its children, then the child of
@@ -240,37 +328,15 @@ struct WideBVH : MeshAccelerator {
 
     void set_child(const Mesh &mesh, int index, int c, int binary) {
         const BVHNode &k = mesh.nodes[size_t(binary)];
-        {
-            WideNode &w = nodes[size_t(index)];
-            for (int axis = 0; axis < 3; ++axis) {
-                if (c == 0) // lanes without a child keep the empty box
-                    for (int l = 0; l < bvh_width; ++l)
-                        w.planes[0][axis][l] = std::numeric_limits<float>::infinity(),
-                        w.planes[1][axis][l] = -std::numeric_limits<float>::infinity();
-                w.planes[0][axis][c] = float_down(k.bounds.min[axis]);
-                w.planes[1][axis][c] = float_up(k.bounds.max[axis]);
-            }
-            w.children = c + 1;
-        }
+        set_box(nodes[size_t(index)], c, k.bounds);
         if (k.count == 0) { // an inner child (collapse() may move `nodes`: index, not reference)
             int child = collapse(mesh, binary);
             nodes[size_t(index)].child[c] = child;
             return;
         }
         nodes[size_t(index)].child[c] = -1 - int(blocks.size());
-        for (int first = k.first; first < k.first + k.count; first += bvh_width) {
-            TriangleBlock b{};
-            for (int l = 0; l < bvh_width; ++l) {
-                const int i = first + l;
-                b.leaf[l] = i < k.first + k.count ? i : -1;
-                for (int v = 0; v < 3; ++v)
-                    for (int axis = 0; axis < 3; ++axis)
-                        b.p[v][axis][l] =
-                            b.leaf[l] < 0 ? 0.0 : mesh.leaf_vertices[3 * size_t(i) + v][axis];
-            }
-            b.more = first + bvh_width < k.first + k.count;
-            blocks.push_back(b);
-        }
+        for (int first = k.first; first < k.first + k.count; first += bvh_width)
+            blocks.push_back(make_block(mesh, first, k.first + k.count));
     }
 
     // Mesh::traverse()'s answer (see the top of this file), nearest child first.
@@ -320,25 +386,9 @@ struct WideSearch {
         for (int b = first_block, more = 1; more; ++b) {
             const TriangleBlock &block = bvh.blocks[size_t(b)];
             more = block.more;
-            M4 candidates = triangle_candidates(block, wr, range);
-            for (int l = 0; l < bvh_width; ++l) {
-                const int i = block.leaf[l];
-                if (i < 0) break;
-                ++primitive_tests;
-                if (!candidates[l]) continue;
-                // The block's own copy of leaf_vertices[3 i ...] (the same doubles): no second
-                // cache line to wait for.
-                Vec3 v[3];
-                for (int k = 0; k < 3; ++k)
-                    v[k] = {block.p[k][0][l], block.p[k][1][l], block.p[k][2][l]};
-                TriangleHit th;
-                if (intersect_triangle(v[0], v[1], v[2], wr, range, th)) {
-                    best = th;
-                    best_triangle = mesh.order[size_t(i)];
-                    range.max = th.t;
-                    found = true;
-                    if (any) return top = 0, false;
-                }
+            if (block_hits(block, mesh, wr, range, best, best_triangle, primitive_tests, any)) {
+                found = true;
+                if (any) return top = 0, false;
             }
         }
         return top > 0;
@@ -369,6 +419,13 @@ struct WideSearch {
 
 inline bool WideBVH::traverse(const Mesh &mesh, const Ray &ray, Interval range, TriangleHit &best,
                               int &best_triangle, RayCounts &counts, bool any) const {
+    if (!flat.empty()) { // the root's box, as Mesh::traverse() tests it, then every block
+        const SlabRay sr(ray);
+        double t_near;
+        ++counts.box_tests;
+        if (!slab_test(mesh.nodes[0].bounds, sr, range, t_near)) return false;
+        return search_flat(mesh, WatertightRay(ray), range, best, best_triangle, counts, any);
+    }
     WideSearch search(*this, mesh, ray, range, any);
     while (search.step()) {
     }
@@ -413,10 +470,12 @@ inline void closest_mesh_hits(const Scene &scene, const double *origins,
     // time its turn comes again. Incoherent rays wait on memory: 12 wide nodes and 8 triangles
     // a ray on the bunny took 1.2 us, a main-memory latency for each. Each search is the one
     // traverse() makes, so the answers are the same.
+    // (A flat mesh, WideBVH::flat, has no hierarchy to wait on: Mesh::search() below.)
     const WideBVH *wide =
         meshes.size() == 1 && meshes[0]->packets
             ? dynamic_cast<const WideBVH *>(meshes[0]->accelerator.get())
             : nullptr;
+    if (wide != nullptr && !wide->flat.empty()) wide = nullptr;
     auto ray_at = [&](size_t i) {
         const double *o = origins + 3 * i, *d = directions + 3 * i;
         return Ray{{o[0], o[1], o[2]}, {d[0], d[1], d[2]}};
