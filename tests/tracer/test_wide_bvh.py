@@ -19,7 +19,7 @@ from reference.bench import diffuse_rays
 from tests.helpers import SCENES
 from tracer import _core
 from tracer.render import render_with_stats, to_core
-from tracer.scene import Mesh, PointLight, load_scene
+from tracer.scene import Mesh, load_scene
 
 MESH_SCENES = ["bunny.toml", "bunny_smooth.toml", "boxes_triangles.toml", "inside_mesh.toml",
                "cornell_box.toml"]  # fmt: skip
@@ -124,41 +124,3 @@ def test_the_hierarchy_built_on_two_threads_is_the_one_built_on_one():
     assert len(one[1]) > 10_000
     for a, b in zip(one, two, strict=True):
         assert a == b
-
-
-def test_a_mesh_of_few_triangles_is_searched_without_its_hierarchy():
-    """The Cornell box's room, five quads joined into one mesh of 10 triangles (at most
-    WideBVH::flat_triangles = 16): with packets=True every ray that meets its root box tests all
-    10 triangles as blocks (one box test, 10 primitive tests), where the lecture's hierarchy
-    tests fewer triangles behind more boxes. The image, lit by a point light so that shadow rays
-    (the any-hit search) ask the mesh too, is the same but where a primary ray meets a corner of
-    the room exactly: a tie between two walls (the top of this file), which the symmetric camera
-    makes at a few pixel centres. closest_mesh_hits() takes the same flat search.
-    """
-    scene = load_scene(SCENES / "cornell_box.toml").with_overrides(
-        width=37, height=29, spp=1, integrator="classic"
-    )
-    lamp = dataclasses.replace(scene.materials["white"], ambient=0.1)
-    lit = dataclasses.replace(
-        scene,
-        objects=scene.objects[1:6],  # the five walls; the camera sits outside the open side
-        materials={**scene.materials, "white": lamp},
-        lights=[PointLight(position=(0.2, 0.8, 0.3), color=(1.0, 1.0, 1.0))],
-    )
-    fast, plain = _both(lit)
-    primary = fast.rays["primary"]
-    assert fast.rays["shadow"] > 0
-    # Every primary and shadow ray starts in or looks into the room's box: one box test each.
-    # A primary ray (the closest hit) tests all 10 triangles; a shadow ray stops at the first
-    # that blocks it, so up to 10.
-    rays = primary + fast.rays["shadow"]
-    assert fast.rays["box_tests"] == rays
-    assert 10 * primary < fast.rays["primitive_tests"] <= 10 * rays
-    assert plain.rays["primitive_tests"] < fast.rays["primitive_tests"]
-    assert fast.image.max() > 0
-    differ = np.argwhere(np.any(fast.image != plain.image, axis=-1))
-    assert len(differ) <= fast.image.shape[0] * fast.image.shape[1] // 100
-    if len(differ):
-        core = to_core(lit)
-        rays = [core.primary_ray(i + 0.5, j + 0.5) for j, i in differ]
-        _assert_ties(core, np.array([o for o, _ in rays]), np.array([d for _, d in rays]))

@@ -523,9 +523,9 @@ struct WorldBounds {
 
 // closest_hit() and in_shadow() as the lecture writes them (09_scene.h, 10_classic.h), with each
 // object behind its world bounds. Shadow rays ask the boxes before the meshes: any blocker
-// answers, and a box is the cheaper test. A mesh of a few triangles (WideBVH::flat, 21_wide_bvh.h)
-// is searched here directly, with the ray's watertight set-up made once for all of them: the
-// hit Mesh::hit() would give (the same search, the same record()).
+// answers, and a box is the cheaper test. A mesh whose wide tree is one node (WideBVH::flat,
+// 21_wide_bvh.h) is searched here directly, with the ray's slab and watertight set-up made once
+// for all of them: the hit Mesh::hit() would give (the same search, the same record()).
 struct CulledQueries {
     const Scene &scene;
     struct Bounded {
@@ -546,7 +546,7 @@ struct CulledQueries {
                 const auto *wide = mesh->packets
                                        ? dynamic_cast<const WideBVH *>(mesh->accelerator.get())
                                        : nullptr;
-                if (wide && !wide->flat.empty()) b.mesh = mesh, b.flat_bvh = wide, any_flat = true;
+                if (wide && wide->flat) b.mesh = mesh, b.flat_bvh = wide, any_flat = true;
                 objects.push_back(b);
             } else if (const auto *box = dynamic_cast<const Box *>(o.get()))
                 objects.push_back({o.get(), WorldBounds::around(*box)});
@@ -575,7 +575,7 @@ struct CulledQueries {
                 if (b.flat_bvh) { // Mesh::hit(), its root box tested above
                     TriangleHit th;
                     int t = -1;
-                    if (b.flat_bvh->search_flat(*b.mesh, wr, range, th, t, counts, false)) {
+                    if (b.flat_bvh->search_flat(*b.mesh, sr, wr, range, th, t, counts, false)) {
                         b.mesh->record(th, t, hit);
                         range.max = hit.t, nearest = Nearest{};
                     }
@@ -604,7 +604,7 @@ struct CulledQueries {
                 if (!wr_made) wr = WatertightRay(ray), wr_made = true;
                 TriangleHit th;
                 int t = -1;
-                if (b.flat_bvh->search_flat(*b.mesh, wr, range, th, t, counts, true))
+                if (b.flat_bvh->search_flat(*b.mesh, sr, wr, range, th, t, counts, true))
                     return true;
                 continue;
             }

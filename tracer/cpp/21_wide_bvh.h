@@ -226,13 +226,9 @@ inline bool block_hits(const TriangleBlock &block, const Mesh &mesh, const Water
 struct WideBVH : MeshAccelerator {
     std::vector<WideNode> nodes; // nodes[0] is the root
     std::vector<TriangleBlock> blocks;
-    // A mesh of at most flat_triangles triangles (the Cornell box's room has 10, its light 2):
-    // every triangle, in leaf order, in blocks tested one after the other without the
-    // hierarchy (search_flat()). With so few triangles the search's own set-up (the slab
-    // reciprocals, the stack, the node's four box tests) costs more than the triangles it
-    // skips: three blocks of candidate tests are cheaper than choosing which to test.
-    static constexpr size_t flat_triangles = 4 * bvh_width;
-    std::vector<TriangleBlock> flat; // empty for larger meshes
+    // A small mesh (the Cornell box's room of 10 triangles, its light of 2) whose wide tree is
+    // one node of leaves: searched by search_flat(), without WideSearch's stack and set-up.
+    bool flat = false;
 
     // The deepest stack: a wide node lies at least one binary level below its parent, so at
     // most max_tree_depth + 1 levels; each visit takes one entry and leaves up to four.
@@ -247,9 +243,8 @@ struct WideBVH : MeshAccelerator {
             set_child(mesh, 0, 0, 0);
         } else
             collapse(mesh, 0);
-        if (mesh.order.size() <= flat_triangles)
-            for (size_t first = 0; first < mesh.order.size(); first += bvh_width)
-                flat.push_back(make_block(mesh, int(first), int(mesh.order.size())));
+        flat = nodes.size() == 1;
+        for (int c = 0; c < nodes[0].children; ++c) flat = flat && nodes[0].child[c] < 0;
     }
 
     // Lane c of a node's boxes: `box` rounded outward to float (lanes after c: empty boxes).
@@ -281,22 +276,43 @@ struct WideBVH : MeshAccelerator {
         return b;
     }
 
-    // A flat mesh's answer: every block in leaf order, the ray's watertight set-up made by the
-    // caller (once for all the meshes a ray meets, CulledQueries in 20_path.h). The closest
-    // hit is the one every search finds (the smallest t that intersect_triangle() accepts);
-    // only between triangles hit at the same t may a different one be kept, as between the
-    // binary and the wide hierarchy (the top of this file). No box test: the caller has
-    // tested the mesh's root box (WorldBounds), or traverse() does. (A 4-lane slab test of the
-    // blocks' boxes first, to skip the blocks a ray misses, made the Cornell box 8 % slower.)
-    bool search_flat(const Mesh &mesh, const WatertightRay &wr, Interval range,
-                     TriangleHit &best, int &best_triangle, RayCounts &counts, bool any) const {
+    // A flat mesh's answer, WideSearch's for a tree of one node, step by step: the node's four
+    // boxes tested at once, the leaves hit taken nearest first (the same order: farthest first
+    // into `next`, then from its end), each skipped if a hit has come nearer meanwhile. So the
+    // same hits, bit for bit, counted alike. The ray's set-up (slab and watertight) comes from
+    // the caller, made once for every mesh the ray meets (CulledQueries in 20_path.h).
+    bool search_flat(const Mesh &mesh, const SlabRay &sr, const WatertightRay &wr,
+                     Interval range, TriangleHit &best, int &best_triangle, RayCounts &counts,
+                     bool any) const {
+        const WideNode &node = nodes[0];
+        counts.box_tests += uint64_t(node.children);
+        D4 t_near;
+        const M4 hit = slab_test(node, sr, range, t_near);
+        struct Entry {
+            int32_t child;
+            double t_near;
+        } next[bvh_width];
+        int n = 0;
+        for (int c = 0; c < node.children; ++c) {
+            if (!hit[c]) continue;
+            Entry x{node.child[c], t_near[c]};
+            int k = n++;
+            for (; k > 0 && next[k - 1].t_near < x.t_near; --k) next[k] = next[k - 1];
+            next[k] = x;
+        }
         bool found = false;
-        for (const TriangleBlock &block : flat)
-            if (block_hits(block, mesh, wr, range, best, best_triangle, counts.primitive_tests,
-                           any)) {
-                found = true;
-                if (any) return true;
+        for (int k = n - 1; k >= 0; --k) {
+            if (next[k].t_near > range.max) continue;
+            for (int b = -1 - next[k].child, more = 1; more; ++b) {
+                const TriangleBlock &block = blocks[size_t(b)];
+                more = block.more;
+                if (block_hits(block, mesh, wr, range, best, best_triangle,
+                               counts.primitive_tests, any)) {
+                    found = true;
+                    if (any) return true;
+                }
             }
+        }
         return found;
     }
 
@@ -419,13 +435,6 @@ struct WideSearch {
 
 inline bool WideBVH::traverse(const Mesh &mesh, const Ray &ray, Interval range, TriangleHit &best,
                               int &best_triangle, RayCounts &counts, bool any) const {
-    if (!flat.empty()) { // the root's box, as Mesh::traverse() tests it, then every block
-        const SlabRay sr(ray);
-        double t_near;
-        ++counts.box_tests;
-        if (!slab_test(mesh.nodes[0].bounds, sr, range, t_near)) return false;
-        return search_flat(mesh, WatertightRay(ray), range, best, best_triangle, counts, any);
-    }
     WideSearch search(*this, mesh, ray, range, any);
     while (search.step()) {
     }
@@ -470,12 +479,10 @@ inline void closest_mesh_hits(const Scene &scene, const double *origins,
     // time its turn comes again. Incoherent rays wait on memory: 12 wide nodes and 8 triangles
     // a ray on the bunny took 1.2 us, a main-memory latency for each. Each search is the one
     // traverse() makes, so the answers are the same.
-    // (A flat mesh, WideBVH::flat, has no hierarchy to wait on: Mesh::search() below.)
     const WideBVH *wide =
         meshes.size() == 1 && meshes[0]->packets
             ? dynamic_cast<const WideBVH *>(meshes[0]->accelerator.get())
             : nullptr;
-    if (wide != nullptr && !wide->flat.empty()) wide = nullptr;
     auto ray_at = [&](size_t i) {
         const double *o = origins + 3 * i, *d = directions + 3 * i;
         return Ray{{o[0], o[1], o[2]}, {d[0], d[1], d[2]}};
