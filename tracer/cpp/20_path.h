@@ -40,6 +40,7 @@
 #include "11_render.h"
 #include "13_transform.h"
 #include "14_box.h"
+#include "15_triangle.h"
 #include "16_mesh.h"
 #include "21_wide_bvh.h"
 #include "constants.h"
