@@ -255,3 +255,30 @@ def test_culled_queries_agree_on_every_kind_of_object_and_placement():
     _same_paths(plain, culled)
     background = np.array([0.2, 0.25, 0.3], dtype=np.float32)  # seen directly: exactly it
     assert np.count_nonzero(np.any(plain.image != background, axis=-1)) > 32 * 40 / 2
+
+
+def test_culled_queries_agree_where_a_plane_lies_on_a_small_meshs_face():
+    """A cube mesh of 12 triangles (its wide tree one node of leaves, searched by
+    WideBVH::search_flat() from CulledQueries) whose floor lies in a plane, seen from inside at
+    1e6: the plane's hit and the mesh's agree in t to within rounding, so which one is kept
+    depends on which boxes the search's slab tests let through. A first version of the flat
+    search tested every triangle, no boxes, and kept the mesh where the lecture kept the plane
+    (hypothesis found it: tests/tracer/test_core_fuzz.py); the same search as the hierarchy's
+    keeps the same hits."""
+    big = 1e6
+    corners = [[x, y, z] for x in (-big, big) for y in (0.0, 2 * big) for z in (-big, big)]
+    faces = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]]
+    scene = tracer.load_scene(
+        {
+            "camera": {"eye": [0.0, big, 0.0], "look_at": [0.0, 0.0, 0.0], "up": [0.0, 0.0, 1.0],
+                       "fov_y": 1.0, "width": 16, "height": 12},
+            "render": {"integrator": "path", "max_depth": 2, "spp": 4, "seed": 0},
+            "materials": {"a": {}, "b": {"color": [0.0, 0.0, 0.0]}},
+            "objects": [sphere([0.0, 0.0, 0.0], 1.0, "a"), plane([0, 0, 0], [0, 1, 0], "a"),
+                        plane([0, 0, 0], [0, 0, 1], "a"), plane([0, 0, 0], [0, 0, 1], "b"),
+                        {"type": "mesh", "vertices": corners, "faces": faces, "material": "b"}],
+        }
+    )  # fmt: skip
+    plain, culled = _both_queries(scene)
+    _same_paths(plain, culled)
+    assert plain.rays["secondary"] > 0  # some paths go on from the plane (material a)

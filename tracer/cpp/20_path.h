@@ -40,7 +40,9 @@
 #include "11_render.h"
 #include "13_transform.h"
 #include "14_box.h"
+#include "15_triangle.h"
 #include "16_mesh.h"
+#include "21_wide_bvh.h"
 #include "constants.h"
 
 namespace rt {
@@ -522,21 +524,32 @@ struct WorldBounds {
 
 // closest_hit() and in_shadow() as the lecture writes them (09_scene.h, 10_classic.h), with each
 // object behind its world bounds. Shadow rays ask the boxes before the meshes: any blocker
-// answers, and a box is the cheaper test.
+// answers, and a box is the cheaper test. A mesh whose wide tree is one node (WideBVH::flat,
+// 21_wide_bvh.h) is searched here directly, with the ray's slab and watertight set-up made once
+// for all of them: the hit Mesh::hit() would give (the same search, the same record()).
 struct CulledQueries {
     const Scene &scene;
     struct Bounded {
         const Object *object;
         WorldBounds bounds;
+        const Mesh *mesh = nullptr;   // a flat mesh (flat_bvh its search), else null
+        const WideBVH *flat_bvh = nullptr;
     };
     std::vector<Bounded> objects; // in the scene's order (ties between equal t go as there)
     std::vector<Bounded> blockers; // the same, boxes first
+    bool any_flat = false;
 
     explicit CulledQueries(const Scene &s) : scene(s) {
         for (const auto &o : s.objects) {
-            if (const auto *mesh = dynamic_cast<const Mesh *>(o.get()))
-                objects.push_back({o.get(), WorldBounds::around(*mesh)});
-            else if (const auto *box = dynamic_cast<const Box *>(o.get()))
+            if (const auto *mesh = dynamic_cast<const Mesh *>(o.get())) {
+                Bounded b{o.get(), WorldBounds::around(*mesh)};
+                // Mesh::search()'s choice: the faster search only with packets on.
+                const auto *wide = mesh->packets
+                                       ? dynamic_cast<const WideBVH *>(mesh->accelerator.get())
+                                       : nullptr;
+                if (wide && wide->flat) b.mesh = mesh, b.flat_bvh = wide, any_flat = true;
+                objects.push_back(b);
+            } else if (const auto *box = dynamic_cast<const Box *>(o.get()))
                 objects.push_back({o.get(), WorldBounds::around(*box)});
             else
                 objects.push_back({o.get(), WorldBounds::everywhere()});
@@ -554,8 +567,21 @@ struct CulledQueries {
         if (!objects.empty()) {
             const SlabRay sr(ray);
             const double reach = max_abs(ray.o);
+            // The ray's watertight set-up (15_triangle.h: a permutation and three divisions),
+            // once for every flat mesh.
+            WatertightRay wr;
+            if (any_flat) wr = WatertightRay(ray);
             for (const Bounded &b : objects) {
                 if (!b.bounds.may_hit(sr, reach, range, counts)) continue;
+                if (b.flat_bvh) { // Mesh::hit(), its root box tested above
+                    TriangleHit th;
+                    int t = -1;
+                    if (b.flat_bvh->search_flat(*b.mesh, sr, wr, range, th, t, counts, false)) {
+                        b.mesh->record(th, t, hit);
+                        range.max = hit.t, nearest = Nearest{};
+                    }
+                    continue;
+                }
                 if (b.object->hit(ray, range, hit, counts)) range.max = hit.t, nearest = Nearest{};
             }
         }
@@ -571,9 +597,20 @@ struct CulledQueries {
         if (blockers.empty()) return false;
         const SlabRay sr(ray);
         const double reach = max_abs(ray.o);
-        for (const Bounded &b : blockers)
-            if (b.bounds.may_hit(sr, reach, range, counts) && b.object->blocks(ray, range, counts))
-                return true;
+        WatertightRay wr;
+        bool wr_made = false; // when the first flat mesh is asked (a box may answer first)
+        for (const Bounded &b : blockers) {
+            if (!b.bounds.may_hit(sr, reach, range, counts)) continue;
+            if (b.flat_bvh) { // Mesh::blocks(), its root box tested above
+                if (!wr_made) wr = WatertightRay(ray), wr_made = true;
+                TriangleHit th;
+                int t = -1;
+                if (b.flat_bvh->search_flat(*b.mesh, sr, wr, range, th, t, counts, true))
+                    return true;
+                continue;
+            }
+            if (b.object->blocks(ray, range, counts)) return true;
+        }
         return false;
     }
 };

@@ -193,9 +193,42 @@ inline M4 triangle_candidates(const TriangleBlock &block, const WatertightRay &r
                                   r.Sx, r.Sy, r.Sz, range.min, range.max);
 }
 
+// The triangles of one block tested against one ray, in leaf order, as leaf_hit() tests them:
+// the block's candidates (triangle_candidates()) re-tested by intersect_triangle() itself with
+// the range shrunk by each hit. Counts each real triangle as one primitive test. Returns
+// whether one was hit; with `any`, stops at the first.
+inline bool block_hits(const TriangleBlock &block, const Mesh &mesh, const WatertightRay &wr,
+                       Interval &range, TriangleHit &best, int &best_triangle,
+                       uint64_t &primitive_tests, bool any) {
+    M4 candidates = triangle_candidates(block, wr, range);
+    bool found = false;
+    for (int l = 0; l < bvh_width; ++l) {
+        const int i = block.leaf[l];
+        if (i < 0) break;
+        ++primitive_tests;
+        if (!candidates[l]) continue;
+        // The block's own copy of leaf_vertices[3 i ...] (the same doubles): no second cache
+        // line to wait for.
+        Vec3 v[3];
+        for (int k = 0; k < 3; ++k) v[k] = {block.p[k][0][l], block.p[k][1][l], block.p[k][2][l]};
+        TriangleHit th;
+        if (intersect_triangle(v[0], v[1], v[2], wr, range, th)) {
+            best = th;
+            best_triangle = mesh.order[size_t(i)];
+            range.max = th.t;
+            found = true;
+            if (any) return true;
+        }
+    }
+    return found;
+}
+
 struct WideBVH : MeshAccelerator {
     std::vector<WideNode> nodes; // nodes[0] is the root
     std::vector<TriangleBlock> blocks;
+    // A small mesh (the Cornell box's room of 10 triangles, its light of 2) whose wide tree is
+    // one node of leaves: searched by search_flat(), without WideSearch's stack and set-up.
+    bool flat = false;
 
     // The deepest stack: a wide node lies at least one binary level below its parent, so at
     // most max_tree_depth + 1 levels; each visit takes one entry and leaves up to four.
@@ -210,6 +243,77 @@ struct WideBVH : MeshAccelerator {
             set_child(mesh, 0, 0, 0);
         } else
             collapse(mesh, 0);
+        flat = nodes.size() == 1;
+        for (int c = 0; c < nodes[0].children; ++c) flat = flat && nodes[0].child[c] < 0;
+    }
+
+    // Lane c of a node's boxes: `box` rounded outward to float (lanes after c: empty boxes).
+    static void set_box(WideNode &w, int c, const AABB &box) {
+        for (int axis = 0; axis < 3; ++axis) {
+            if (c == 0) // lanes without a child keep the empty box
+                for (int l = 0; l < bvh_width; ++l)
+                    w.planes[0][axis][l] = std::numeric_limits<float>::infinity(),
+                    w.planes[1][axis][l] = -std::numeric_limits<float>::infinity();
+            w.planes[0][axis][c] = float_down(box.min[axis]);
+            w.planes[1][axis][c] = float_up(box.max[axis]);
+        }
+        w.children = c + 1;
+    }
+
+    // The block of leaf-order triangles first, first + 1, ... (up to four, before `end`),
+    // padded with the all-zero triangle.
+    static TriangleBlock make_block(const Mesh &mesh, int first, int end) {
+        TriangleBlock b{};
+        for (int l = 0; l < bvh_width; ++l) {
+            const int i = first + l;
+            b.leaf[l] = i < end ? i : -1;
+            for (int v = 0; v < 3; ++v)
+                for (int axis = 0; axis < 3; ++axis)
+                    b.p[v][axis][l] =
+                        b.leaf[l] < 0 ? 0.0 : mesh.leaf_vertices[3 * size_t(i) + v][axis];
+        }
+        b.more = first + bvh_width < end;
+        return b;
+    }
+
+    // A flat mesh's answer, WideSearch's for a tree of one node, step by step: the node's four
+    // boxes tested at once, the leaves hit taken nearest first (the same order: farthest first
+    // into `next`, then from its end), each skipped if a hit has come nearer meanwhile. So the
+    // same hits, bit for bit, counted alike. The ray's set-up (slab and watertight) comes from
+    // the caller, made once for every mesh the ray meets (CulledQueries in 20_path.h).
+    bool search_flat(const Mesh &mesh, const SlabRay &sr, const WatertightRay &wr,
+                     Interval range, TriangleHit &best, int &best_triangle, RayCounts &counts,
+                     bool any) const {
+        const WideNode &node = nodes[0];
+        counts.box_tests += uint64_t(node.children);
+        D4 t_near;
+        const M4 hit = slab_test(node, sr, range, t_near);
+        struct Entry {
+            int32_t child;
+            double t_near;
+        } next[bvh_width];
+        int n = 0;
+        for (int c = 0; c < node.children; ++c) {
+            if (!hit[c]) continue;
+            Entry x{node.child[c], t_near[c]};
+            int k = n++;
+            for (; k > 0 && next[k - 1].t_near < x.t_near; --k) next[k] = next[k - 1];
+            next[k] = x;
+        }
+        bool found = false;
+        for (int k = n - 1; k >= 0; --k) {
+            if (next[k].t_near > range.max) continue;
+            for (int b = -1 - next[k].child, more = 1; more; ++b) {
+                const TriangleBlock &block = blocks[size_t(b)];
+                more = block.more;
+                if (block_hits(block, mesh, wr, range, best, best_triangle,
+                               counts.primitive_tests, any)) {
+                    found = true;
+                    if (any) return true;
+                }
+            }
+        }
+        return found;
     }
 
     // A wide node in place of the binary inner node `binary`: its children, then the child of
@@ -240,37 +344,15 @@ struct WideBVH : MeshAccelerator {
 
     void set_child(const Mesh &mesh, int index, int c, int binary) {
         const BVHNode &k = mesh.nodes[size_t(binary)];
-        {
-            WideNode &w = nodes[size_t(index)];
-            for (int axis = 0; axis < 3; ++axis) {
-                if (c == 0) // lanes without a child keep the empty box
-                    for (int l = 0; l < bvh_width; ++l)
-                        w.planes[0][axis][l] = std::numeric_limits<float>::infinity(),
-                        w.planes[1][axis][l] = -std::numeric_limits<float>::infinity();
-                w.planes[0][axis][c] = float_down(k.bounds.min[axis]);
-                w.planes[1][axis][c] = float_up(k.bounds.max[axis]);
-            }
-            w.children = c + 1;
-        }
+        set_box(nodes[size_t(index)], c, k.bounds);
         if (k.count == 0) { // an inner child (collapse() may move `nodes`: index, not reference)
             int child = collapse(mesh, binary);
             nodes[size_t(index)].child[c] = child;
             return;
         }
         nodes[size_t(index)].child[c] = -1 - int(blocks.size());
-        for (int first = k.first; first < k.first + k.count; first += bvh_width) {
-            TriangleBlock b{};
-            for (int l = 0; l < bvh_width; ++l) {
-                const int i = first + l;
-                b.leaf[l] = i < k.first + k.count ? i : -1;
-                for (int v = 0; v < 3; ++v)
-                    for (int axis = 0; axis < 3; ++axis)
-                        b.p[v][axis][l] =
-                            b.leaf[l] < 0 ? 0.0 : mesh.leaf_vertices[3 * size_t(i) + v][axis];
-            }
-            b.more = first + bvh_width < k.first + k.count;
-            blocks.push_back(b);
-        }
+        for (int first = k.first; first < k.first + k.count; first += bvh_width)
+            blocks.push_back(make_block(mesh, first, k.first + k.count));
     }
 
     // Mesh::traverse()'s answer (see the top of this file), nearest child first.
@@ -320,25 +402,9 @@ struct WideSearch {
         for (int b = first_block, more = 1; more; ++b) {
             const TriangleBlock &block = bvh.blocks[size_t(b)];
             more = block.more;
-            M4 candidates = triangle_candidates(block, wr, range);
-            for (int l = 0; l < bvh_width; ++l) {
-                const int i = block.leaf[l];
-                if (i < 0) break;
-                ++primitive_tests;
-                if (!candidates[l]) continue;
-                // The block's own copy of leaf_vertices[3 i ...] (the same doubles): no second
-                // cache line to wait for.
-                Vec3 v[3];
-                for (int k = 0; k < 3; ++k)
-                    v[k] = {block.p[k][0][l], block.p[k][1][l], block.p[k][2][l]};
-                TriangleHit th;
-                if (intersect_triangle(v[0], v[1], v[2], wr, range, th)) {
-                    best = th;
-                    best_triangle = mesh.order[size_t(i)];
-                    range.max = th.t;
-                    found = true;
-                    if (any) return top = 0, false;
-                }
+            if (block_hits(block, mesh, wr, range, best, best_triangle, primitive_tests, any)) {
+                found = true;
+                if (any) return top = 0, false;
             }
         }
         return top > 0;
