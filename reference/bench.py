@@ -397,26 +397,36 @@ def _times_to_error(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     return made
 
 
+def _label(rows: list[dict[str, Any]]) -> Callable[[dict[str, Any]], str]:
+    """A row's case as tables and the scaling lines name it: with its metric where the case has
+    more than one (the viewer's render, encode and transfer times, fps and frame size)."""
+    metrics: dict[str, set[str]] = {}
+    for r in rows:
+        metrics.setdefault(r["case"], set()).add(r["metric"])
+    return lambda r: r["case"] if len(metrics[r["case"]]) == 1 else f"{r['case']}, {r['metric']}"
+
+
 def format_markdown(rows: list[dict[str, Any]], command: str = "rtlab bench all") -> str:
     """The rows of one run as a Markdown table for the README: rtlab's figure and every other
-    renderer's with rtlab's speed-up over it (below 1: rtlab is slower), then each renderer's
-    gain from the second thread, the CPU and the command."""
+    renderer's (or engine's) with rtlab's speed-up over it (below 1: rtlab is slower), then each
+    renderer's gain from the second thread, the CPU and the command."""
     rows = [r for r in rows if r["metric"] != "rmse"] + _times_to_error(rows)
-    others = sorted({r["renderer"] for r in rows} - {"rtlab"})
+    label = _label(rows)
+    ours_too = any(r["renderer"] == "rtlab" for r in rows)
+    names = (["rtlab"] if ours_too else []) + sorted({r["renderer"] for r in rows} - {"rtlab"})
     lines = [
-        "| case | threads | rtlab | " + " | ".join(others) + " |",
-        "|---|---|---|" + "---|" * len(others),
+        "| " + " | ".join(["case", "threads", *names]) + " |",
+        "|" + "---|" * (2 + len(names)),
     ]
-    for case, threads, metric in sorted({(r["case"], r["threads"], r["metric"]) for r in rows}):
-        group = {r["renderer"]: r for r in rows if (r["case"], r["threads"], r["metric"]) ==
-                 (case, threads, metric)}  # fmt: skip
+    for case, threads in sorted({(label(r), r["threads"]) for r in rows}):
+        group = {r["renderer"]: r for r in rows if (label(r), r["threads"]) == (case, threads)}
         ours = group.get("rtlab")
-        cells = [f"{ours['value']:.4g} {ours['unit']}" if ours else ""]
-        for name in others:
+        cells = []
+        for name in names:
             r = group.get(name)
             if r is None:
                 cells.append("")
-            elif ours is None:
+            elif ours is None or name == "rtlab":
                 cells.append(f"{r['value']:.4g} {r['unit']}")
             else:
                 cells.append(f"{r['value']:.4g} {r['unit']} (rtlab {_ratio(ours, r):.2f}x)")
@@ -430,9 +440,10 @@ def format_markdown(rows: list[dict[str, Any]], command: str = "rtlab bench all"
 
 
 def thread_scaling(rows: list[dict[str, Any]]) -> dict[tuple[str, str, str], float]:
-    """What each renderer gains from the second thread, per suite and case: the 1-thread time
-    over the 2-thread time (or the 2-thread throughput over the 1-thread one), from the rows of
-    one run."""
+    """What each renderer gains from the second thread, per suite and case (with its metric
+    where the case has several): the 1-thread time over the 2-thread time (or the 2-thread
+    throughput over the 1-thread one), from the rows of one run."""
+    label = _label(rows)
     gains = {}
     for r in rows:
         if r["threads"] != 2:
@@ -440,9 +451,9 @@ def thread_scaling(rows: list[dict[str, Any]]) -> dict[tuple[str, str, str], flo
         one = [q for q in rows if q["threads"] == 1 and (q.get("suite"), q["case"],
                q["renderer"], q["metric"]) == (r.get("suite"), r["case"], r["renderer"],
                r["metric"])]  # fmt: skip
-        if one and one[0]["value"] > 0 and r["value"] > 0:
+        if one and one[0]["value"] > 0 and r["value"] > 0 and r["unit"] != "bytes":
             v1, v2 = one[0]["value"], r["value"]
-            gains[(str(r.get("suite", "")), r["case"], r["renderer"])] = (
+            gains[(str(r.get("suite", "")), label(r), r["renderer"])] = (
                 v1 / v2 if r["unit"] in ("s", "ms") else v2 / v1  # a time, or a rate
             )
     return gains
