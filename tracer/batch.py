@@ -122,13 +122,11 @@ def sources_digest(root: Path, patterns: Sequence[str]) -> str:
 
 
 def write_atomic(path: Path, text: str) -> None:
-    """``text`` into ``path`` through a temporary file beside it, renamed over it; readable by
-    every user (a cluster's workers and its scheduler may run as different users)."""
+    """``text`` into ``path`` through a temporary file beside it, renamed over it."""
     from tracer.image import atomic_path
 
     with atomic_path(path) as tmp:
         tmp.write_text(text)
-        os.chmod(tmp, 0o644)
 
 
 def finished(task: Task) -> dict[str, Any] | None:

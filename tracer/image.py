@@ -36,6 +36,19 @@ def image_format(path: str | os.PathLike[str]) -> str:
     return suffix
 
 
+def _umask() -> int:
+    """This process's umask, read without changing it (os.umask can only set it, which would
+    race with other threads creating files); Linux lists it in /proc/self/status."""
+    try:
+        with open("/proc/self/status") as status:
+            for line in status:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    return 0o022
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     """Yield a temporary path beside ``path``; on success rename it over ``path``."""
@@ -44,6 +57,9 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
     os.close(fd)
     try:
+        # mkstemp makes the file readable by its owner alone; the output gets the mode any
+        # new file of this process gets (0666 less the umask), as open() would have given it.
+        os.chmod(tmp, 0o666 & ~_umask())
         yield Path(tmp)
         os.replace(tmp, target)
     except BaseException:

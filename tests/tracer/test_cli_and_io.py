@@ -409,3 +409,23 @@ def test_console_script_is_installed():
     assert exe.exists() and os.access(exe, os.X_OK)
     done = subprocess.run([str(exe), "--help"], capture_output=True, text=True, check=True)
     assert "render" in done.stdout
+
+
+def test_an_atomic_write_gets_the_mode_a_plain_write_gets(tmp_path):
+    """mkstemp's temporary file is private (0600); renamed into place it must not keep that
+    mode, or a web server could not serve a page and another user could not read a result."""
+    import os
+    import stat
+
+    from tracer.image import atomic_path
+
+    old = os.umask(0o022)  # the usual one, set so that the expected mode is known
+    try:
+        plain = tmp_path / "plain.txt"
+        plain.write_text("x")
+        with atomic_path(tmp_path / "atomic.txt") as tmp:
+            tmp.write_text("x")
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE(os.stat(plain).st_mode) == 0o644
+    assert stat.S_IMODE(os.stat(tmp_path / "atomic.txt").st_mode) == 0o644
