@@ -337,6 +337,8 @@ def summary(outcomes: Sequence[Outcome], what: str = "tasks") -> str:
     for o in outcomes:
         if o.status in ("failed", "error"):
             lines.append(f"  {o.status}: {o.name}: {o.reason}")
+        elif o.status == "skipped" and o.reason:  # its verdict from the run that finished it
+            lines.append(f"  failed (an earlier run): {o.name}: {o.reason}")
     return "\n".join(lines)
 
 

@@ -97,6 +97,11 @@ def test_a_crash_a_flood_and_a_hang_each_fail_their_own_task(
     text = summary(outcomes, "submissions")
     assert "4 submissions: 1 done, 3 failed, 0 errors" in text
     assert all(f"failed: {k}: {k} in" in text for k in ("crash", "flood", "hang"))
+    # Run again, everything is skipped, and the summary still names what failed and why.
+    again = summary(_grade(subs, names, tmp_path / "g", client=client), "submissions")
+    assert "0 done, 0 failed, 0 errors, 4 skipped" in again
+    assert all(f"failed (an earlier run): {k}: {k} in" in again for k in ("crash", "flood", "hang"))
+    assert "solution" not in again
 
 
 def test_a_worker_killed_mid_batch_loses_nothing(tmp_path: Path, subs: Path, client) -> None:
