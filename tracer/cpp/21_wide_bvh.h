@@ -122,7 +122,9 @@ struct alignas(64) WideNode {
 // k-th), and each one's index in leaf order (Mesh::leaf_vertices, Mesh::order); -1 pads a
 // block with a triangle whose vertices are all 0, whose edge functions are exactly 0 (det = 0:
 // no hit), and which the candidate loop skips besides. `more`: the leaf's next block follows.
-struct TriangleBlock {
+// Aligned to a cache line, so that a block (320 bytes) is exactly five lines, the five that
+// WideSearch::node() prefetches, and never straddles a sixth.
+struct alignas(64) TriangleBlock {
     D4 p[3][3];
     int32_t leaf[bvh_width];
     int32_t more;
