@@ -403,3 +403,17 @@ def test_the_core_refuses_a_face_that_names_a_missing_vertex(bad):
     core = to_core(tracer.load_scene(scene_dict(objects=[sphere([0, 0, 0], 1)])))
     with pytest.raises(IndexError, match="mesh face refers to a missing vertex"):
         core.add_mesh(vertices, faces, None, "bvh", 0, 0)
+
+
+def test_a_scene_dict_from_python_may_give_vectors_as_tuples():
+    """TOML arrays arrive as lists; a Python user writes (0, 0, 0). Both mean a vector, and the
+    scene is the same either way; a tuple of the wrong length is still named."""
+    as_lists = tracer.load_scene(scene_dict(objects=[sphere([0, 1, 0], 1)]))
+    with_tuples = scene_dict(objects=[sphere([0, 1, 0], 1)])
+    with_tuples["objects"][0]["center"] = (0, 1, 0)
+    with_tuples["camera"]["eye"] = tuple(with_tuples["camera"]["eye"])
+    assert tracer.load_scene(with_tuples).objects == as_lists.objects
+    assert tracer.load_scene(with_tuples).camera == as_lists.camera
+    with_tuples["objects"][0]["center"] = (0, 1)
+    with pytest.raises(SceneError, match=r"objects\[0\]\.center: expected an array of three"):
+        tracer.load_scene(with_tuples)

@@ -189,7 +189,7 @@ class Reader:
         return self._vector(value, f"{path}.{key}", nonzero=nonzero)
 
     def _vector(self, value: Any, full: str, *, nonzero: bool = False) -> Vec3:
-        if not isinstance(value, list) or len(value) != 3:
+        if not isinstance(value, list | tuple) or len(value) != 3:  # tuples: dicts from Python
             raise self.fail(full, f"expected an array of three numbers, got {describe(value)}")
         v = tuple(self._finite(x, f"{full}[{i}]") for i, x in enumerate(value))
         if nonzero and not any(v):
@@ -219,7 +219,8 @@ class Reader:
     ) -> list[Vec3]:
         value = self._get(t, path, key, True)
         full = f"{path}.{key}"
-        if not isinstance(value, list) or not value or (count is not None and len(value) != count):
+        listed = isinstance(value, list | tuple)  # tuples: a scene dict written in Python
+        if not listed or not value or (count is not None and len(value) != count):
             n = f"{count}" if count is not None else "one or more"
             raise self.fail(full, f"expected an array of {n} points, got {describe(value)}")
         return [self._vector(p, f"{full}[{i}]") for i, p in enumerate(value)]
