@@ -327,3 +327,31 @@ def test_usage_errors_suggest_the_near_name_and_are_not_scene_errors(capsys):
     assert "(did you mean 'povray'?)" in capsys.readouterr().err
     assert main(["bench", "geometri"]) == 2
     assert "(did you mean 'geometry'?)" in capsys.readouterr().err
+
+
+def test_a_case_with_several_metrics_names_each_on_its_row():
+    """The viewer's and the batch's rows have several metrics per case; a table or a scaling
+    line that left the metric out would show four numbers for one case with nothing to tell
+    them apart, and the scaling line would report whichever metric came last."""
+    from reference.bench import format_markdown, thread_scaling
+
+    base = {"case": "view", "renderer": "rtlab", "machine": "test CPU", "suite": "viewer"}
+    rows = [
+        base | {"threads": 1, "metric": "render_ms", "value": 80.0, "unit": "ms"},
+        base | {"threads": 2, "metric": "render_ms", "value": 40.0, "unit": "ms"},
+        base | {"threads": 1, "metric": "fps", "value": 8.0, "unit": "frames/s"},
+        base | {"threads": 2, "metric": "fps", "value": 12.0, "unit": "frames/s"},
+        base | {"threads": 1, "metric": "frame_bytes", "value": 9e4, "unit": "bytes"},
+        base | {"threads": 2, "metric": "frame_bytes", "value": 9e4, "unit": "bytes"},
+    ]
+    gains = thread_scaling(rows)
+    # A time halves (2x), a rate grows 1.5x; a frame's size has no gain from a thread.
+    assert gains == {("viewer", "view, render_ms", "rtlab"): 2.0,
+                     ("viewer", "view, fps", "rtlab"): 1.5}  # fmt: skip
+    table = format_markdown(rows, "rtlab bench viewer").splitlines()
+    assert table[0] == "| case | threads | rtlab |"
+    assert "| view, render_ms | 2 | 40 ms |" in table
+    assert "| view, fps | 1 | 8 frames/s |" in table
+    # Without rtlab rows (the batch suite's engines) there is no empty rtlab column.
+    engines = [r | {"renderer": "serial", "case": "grade"} for r in rows[:2]]
+    assert format_markdown(engines).splitlines()[0] == "| case | threads | serial |"
