@@ -408,13 +408,20 @@ def nanobind_object(cache: Path | None = None) -> Path:
     if target.exists():
         return target
     cache.mkdir(parents=True, exist_ok=True)
-    partial = cache / f"nb_combined.{os.getpid()}.o"
-    outcome = run_limited(
-        [*command, "-o", str(partial)], cache, BUILD_LIMITS, "the build of nanobind"
-    )
-    if not outcome.ok:
-        raise RuntimeError(outcome.message + "\n" + outcome.output[-2000:])
-    os.replace(partial, target)
+    # One build at a time per cache, across processes and threads alike (an flock belongs to
+    # its open file, and each caller opens its own): a grader's two build threads once both
+    # compiled into the same pid-named partial file, and the second rename found it gone.
+    with open(cache / "lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if target.exists():  # built by whoever held the lock before
+            return target
+        partial = cache / f"nb_combined.{os.getpid()}.{threading.get_ident()}.o"
+        outcome = run_limited(
+            [*command, "-o", str(partial)], cache, BUILD_LIMITS, "the build of nanobind"
+        )
+        if not outcome.ok:
+            raise RuntimeError(outcome.message + "\n" + outcome.output[-2000:])
+        os.replace(partial, target)
     return target
 
 

@@ -20,6 +20,7 @@ import hashlib
 import os
 import shutil
 import tempfile
+import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -352,7 +353,7 @@ def build_mistake(mistake: Mistake, work: Path, cache: Path = MISTAKE_CACHE) -> 
     build = build_extension(submission, work / "ext")
     if build.binary is not None:
         (cache / key).mkdir(parents=True, exist_ok=True)
-        partial = cache / key / f".{build.binary.name}.{os.getpid()}"
+        partial = cache / key / f".{build.binary.name}.{os.getpid()}.{threading.get_ident()}"
         shutil.copyfile(build.binary, partial)
         os.replace(partial, cache / key / build.binary.name)
     return build, False

@@ -213,3 +213,31 @@ def test_the_limits_fit_a_small_machine(tmp_path, monkeypatch):
     monkeypatch.delenv("RTLAB_SANDBOX_MEMORY")
     run = run_probe(build, [], QUICK)  # the same program under 512 MiB: the injection mattered
     assert run.kind == "ok", (run.kind, run.message)
+
+
+def test_two_threads_building_nanobind_into_an_empty_cache_both_get_it(tmp_path, monkeypatch):
+    """A grader builds a submission's probes and extension on two threads; with a cold cache
+    both wanted nanobind's object at once, compiled it into one pid-named partial file, and the
+    second rename found it gone (seen in a fresh clone's run). Now the second waits for the
+    first's object: both succeed, one compile."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from lessons import sandbox
+
+    compiles = []
+    real = sandbox.run_limited
+
+    def counted(command, *args, **kwargs):  # the real compile, counted
+        compiles.append(command)
+        return real(command, *args, **kwargs)
+
+    monkeypatch.setattr(sandbox, "run_limited", counted)
+    cache = tmp_path / "nanobind"
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        got = list(pool.map(lambda _: sandbox.nanobind_object(cache), range(2)))
+    assert got == [cache / "nb_combined.o"] * 2
+    # Both threads asked before either had finished a compile of seconds: without the lock
+    # both compiled (into the same file); with it the second took the first's object.
+    assert len(compiles) == 1
+    assert got[0].stat().st_size > 0
+    assert [p.name for p in cache.glob("nb_combined*")] == ["nb_combined.o"]  # no partials left
