@@ -171,11 +171,10 @@ def reference_dir() -> Path:
 
 
 def sources_digest() -> str:
-    h = hashlib.sha256()
-    for pattern in REFERENCE_SOURCES:
-        for path in sorted(ROOT.glob(pattern)):
-            h.update(str(path.relative_to(ROOT)).encode() + b"\0" + path.read_bytes())
-    return h.hexdigest()
+    """The digest of the code a reference image depends on (REFERENCE_SOURCES)."""
+    from tracer.batch import sources_digest as digest_of
+
+    return digest_of(ROOT, REFERENCE_SOURCES)
 
 
 def reference_key(check: SceneCheck) -> str:

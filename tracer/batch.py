@@ -112,13 +112,13 @@ def digest(*parts: object, files: Iterable[Path] = ()) -> str:
 def sources_digest(root: Path, patterns: Sequence[str]) -> str:
     """The digest of the source files under ``root`` matching ``patterns`` (their paths and
     bytes): part of a task's key, so that a change to the code that computes a result runs
-    the task again."""
+    the task again (and of the lesson references' key: lessons/scene_checks.py)."""
     h = hashlib.sha256()
     for pattern in patterns:
         for path in sorted(root.glob(pattern)):
             if path.is_file() and "__pycache__" not in path.parts:
                 h.update(str(path.relative_to(root)).encode() + b"\0" + path.read_bytes())
-    return h.hexdigest()[:32]
+    return h.hexdigest()
 
 
 def write_atomic(path: Path, text: str) -> None:
