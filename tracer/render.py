@@ -442,6 +442,12 @@ def aov_channels(image: npt.NDArray[np.float32]) -> dict[str, npt.NDArray[np.flo
     return {name: np.ascontiguousarray(image[..., k]) for k, name in enumerate(AOV_CHANNELS)}
 
 
+def pass_seed(seed: int, k: int) -> int:
+    """The seed of pass k of a progressive render of a scene seeded ``seed``: a given number of
+    passes gives the same image on any machine (render_progressive, rtlab view)."""
+    return (seed * 1_000_003 + k) % 2**64
+
+
 def render_progressive(
     scene: Scene,
     seconds: float,
@@ -466,7 +472,7 @@ def render_progressive(
     rays: dict[str, int] = {}
     passes = 0
     while True:
-        seed = (scene.render.seed * 1_000_003 + passes) % 2**64
+        seed = pass_seed(scene.render.seed, passes)
         _set_render(core, scene.with_overrides(seed=seed))
         result = _render_core(scene, core, threads, progress, True)
         total = result.image.astype(np.float64) if total is None else total + result.image

@@ -25,7 +25,14 @@ import numpy as np
 import numpy.typing as npt
 
 from tracer.display import AOV_VIEWS, aov_view
-from tracer.render import RenderResult, _render_core, _set_camera, _set_render, default_threads
+from tracer.render import (
+    RenderResult,
+    _render_core,
+    _set_camera,
+    _set_render,
+    default_threads,
+    pass_seed,
+)
 from tracer.render import to_core as _to_core
 from tracer.scene import Scene, Stereo
 from tracer.viewer.camera import View, orbit, pan, walk, zoom
@@ -281,7 +288,7 @@ class FrameMaker:
         spp = ANTIALIAS_SPP if classic_refine and base_spp == 1 else base_spp
         if state.interacting:
             spp = 1
-        seed = (scene.render.seed * 1_000_003 + pass_index) % 2**64
+        seed = pass_seed(scene.render.seed, pass_index)
         framed = frame_scene(scene, state, spp, seed)
         start = time.perf_counter()
         if self._core_of is not scene:
