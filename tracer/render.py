@@ -154,7 +154,8 @@ def default_threads() -> int:
 
 def _set_render(core: _core.Scene, scene: Scene) -> None:
     r = scene.render
-    core.set_render(r.max_depth, r.min_coefficient, r.spp, r.seed, r.background, r.ambient_light)
+    core.set_render(r.max_depth, r.min_coefficient, r.spp, r.seed, r.background, r.ambient_light,
+                    r.sampler)  # fmt: skip
 
 
 # --------------------------------------------------------------------------- stereo pairs

@@ -24,12 +24,19 @@
 
 namespace rt {
 
+// Where a pixel's samples lie when spp > 1 (11_render.h for_each_sample()).
+enum class Sampler {
+    stratified, // a rows x cols grid of strata, one jittered sample in each
+    sobol,      // Sobol's (0,2)-sequence, Owen-scrambled per pixel
+};
+
 // The defaults are the scene language's (the Python package tracer.scene sets every field).
 struct Settings {
     int max_depth = 5;            // the primary ray is level 1
     double min_coefficient = 0;   // a level whose chain coefficient is below this is black
     int spp = 1;                  // samples per pixel
     uint64_t seed = 0;
+    Sampler sampler = Sampler::stratified;
     Color background{0, 0, 0};    // what a ray that hits nothing returns
     Color ambient_light{1, 1, 1};
 };

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -16,6 +17,7 @@
 #include <functional>
 #include <mutex>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "01_vec3.h"
@@ -40,6 +42,12 @@ struct Rng {
     }
     // The top 53 bits as a double in [0, 1): every value is a multiple of 2^-53, exactly.
     double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
+    // Two numbers for one two-dimensional choice (a point on a light, a direction): here the
+    // next two of the stream; a SobolStream stratifies them as a pair.
+    std::pair<double, double> uniform2() {
+        double u1 = uniform();
+        return {u1, uniform()};
+    }
 };
 
 // The random stream of sample `sample` of pixel `pixel` (row-major index j * width + i): the
@@ -52,18 +60,167 @@ inline Rng pixel_rng(uint64_t seed, uint64_t pixel, uint64_t sample) {
     return Rng(Rng(Rng(seed).next() ^ pixel).next() ^ sample);
 }
 
+// --- Sobol's (0,2)-sequence, Owen-scrambled: the sampler "sobol" ---
+//
+// Jittered strata put one sample in each cell of one grid. The first 2^m points of the first
+// two dimensions of Sobol's sequence (Sobol 1967) are a (0,m,2)-net in base 2: every box of
+// the unit square 2^-a wide and 2^-b high (a + b = m) that starts at a multiple of its size
+// holds exactly one point, for all m + 1 shapes at once, from 1 x 2^m columns to 2^m x 1 rows.
+// A pixel cut by an edge is where stratification matters (the Cornell box's light: three
+// quarters of the squared error at 128 spp); with strata, every stratum the edge crosses adds
+// a coin toss, with the net an edge along either axis crosses only one of 2^m thin columns or
+// rows, and a slanted one is no worse off than with a square grid.
+
+// Dimension 0 is van der Corput's sequence: the bits of k, mirrored about the binary point.
+inline uint32_t sobol_0(uint32_t k) {
+    k = (k << 16) | (k >> 16);
+    k = ((k & 0x00ff00ffu) << 8) | ((k & 0xff00ff00u) >> 8);
+    k = ((k & 0x0f0f0f0fu) << 4) | ((k & 0xf0f0f0f0u) >> 4);
+    k = ((k & 0x33333333u) << 2) | ((k & 0xccccccccu) >> 2);
+    return ((k & 0x55555555u) << 1) | ((k & 0xaaaaaaaau) >> 1);
+}
+
+// Dimension 1: bit b of k adds (xor) the direction number v_b, of the primitive polynomial
+// x + 1, whose recurrence is v_b = v_(b-1) xor (v_(b-1) >> 1) from v_0 = 1/2 (Joe and Kuo's
+// table, dimension 2): Pascal's triangle mod 2 as the generator matrix.
+inline uint32_t sobol_1(uint32_t k) {
+    uint32_t x = 0;
+    for (uint32_t v = 1u << 31; k != 0; k >>= 1, v ^= v >> 1)
+        if (k & 1) x ^= v;
+    return x;
+}
+
+// Owen's nested uniform scrambling (Owen, "Randomly permuted (t,m,s)-nets and (t,s)-sequences",
+// 1995) of the top `bits` bits of x: bit d (from the top) is flipped by a coin tossed for the
+// d bits above it, so numbers that agree on those bits, one cell of width 2^-d, are flipped
+// alike: cells are swapped whole at every scale and every net property survives, while each
+// point becomes uniform. `key`: the scramble (a pixel's and dimension's). The coins are
+// independent of each other (each is hashed from x's own prefix), so they are tossed at once.
+inline uint32_t owen_bits(uint32_t x, uint64_t key, int bits) {
+    uint32_t flips = 0;
+    for (int d = 0; d < bits; ++d) {
+        uint64_t prefix = d == 0 ? 0 : x >> (32 - d); // the d bits above bit d
+        flips |= uint32_t(Rng(key ^ (uint64_t(d) << 32 | prefix)).next() >> 63) << (31 - d);
+    }
+    return x ^ flips;
+}
+
+// x scrambled as a number in [0, 1): its top `bits` bits (2^bits >= the points, which they
+// tell apart) by owen_bits(); below them each point's digits are its own independent coin
+// tosses, the rest of a 53-bit double drawn from its whole prefix.
+inline double owen_scrambled(uint32_t x, uint64_t key, int bits) {
+    uint32_t top = owen_bits(x, key, bits) >> (32 - bits);
+    // A 53-bit integer, so the double is exact and below 1 (top + a uniform double could
+    // round up to 2^bits).
+    uint64_t below = Rng(key ^ (uint64_t(bits) << 32 | (x >> (32 - bits)))).next() >> (11 + bits);
+    return double(uint64_t(top) << (53 - bits) | below) * 0x1.0p-53;
+}
+
+// A nested scramble at the cost of a hash: Laine and Karras ("Stratified sampling for
+// stochastic transparency", 2011) observed that on the bits of x mirrored (sobol_0() mirrors),
+// multiplying by an odd number, adding, and x ^= x * (an even number) each change a bit only by
+// the bits below it, which are the bits above it in x: whatever such a chain does, it is a
+// nested scramble (owen_bits()'s structure, though not all of Owen's random choices). The
+// chain and its constants are Burley's ("Practical Hash-based Owen Scrambling", JCGT 9(4),
+// 2020), chosen by him to pass tests of Owen scrambling's statistics. `seed`: the scramble.
+inline uint32_t fast_owen_mirrored(uint32_t v, uint32_t seed) {
+    v ^= v * 0x3d20adeau;
+    v += seed;
+    v *= (seed >> 16) | 1u;
+    v ^= v * 0x05526c56u;
+    v ^= v * 0x53a22864u;
+    return v;
+}
+
+// A sample's random numbers with the sampler "sobol": its first `sobol_draws` numbers are, one
+// dimension each (uniform()) or two (uniform2()), stratified across the pixel's spp samples as
+// the image-plane point is: padded Sobol (as pbrt-v4's PaddedSobolSampler): each dimension (or
+// pair) takes the (0,2)-sequence's first dimension (or two) at the sample's index permuted for
+// this pixel and dimension, so that no two dimensions are the same sequence, and scrambles it
+// (fast_owen_mirrored(): these are many numbers a sample, the image-plane point two). Six
+// numbers are a path vertex's (20_path.h trace_path(): which light, where on it (a pair),
+// which lobe, which direction (a pair)): the first two vertices, where most of the light is
+// gathered, are stratified; the rest come from the sample's stream, as with the strata. Each number is
+// uniform and independent of the sample's others, as a stream's: the estimate is unbiased. A
+// number is a multiple of 2^-32 (a stream's, of 2^-53): finer than any light or lobe needs.
+struct SobolStream : Rng {
+    static constexpr int sobol_draws = 12;
+    // Per dimension, two 32-bit scrambles and a permutation's seed: the same for every sample
+    // of the pixel, drawn once for it (make_keys()).
+    using Keys = std::array<uint64_t, sobol_draws>;
+    const Keys *keys;
+    uint32_t k;  // the sample's index in the pixel
+    int bits;    // 2^bits >= spp
+    int dim = 0; // the draws so far
+
+    SobolStream(Rng stream, const Keys &pixel_keys, uint32_t index, int b)
+        : Rng(stream), keys(&pixel_keys), k(index), bits(b) {}
+
+    static Keys make_keys(Rng &pixel_stream) {
+        Keys out;
+        for (uint64_t &key : out) key = pixel_stream.next();
+        return out;
+    }
+    // The sample's index permuted for one dimension: a nested scramble of its `bits` bits, the
+    // highest first (fast_owen_mirrored() of them mirrored), is a permutation of 0 .. 2^bits
+    // - 1. (Scrambling the index unmirrored, lowest bit first, keeps which half of the indices
+    // a sample is in, and with it the coarse strata of dimension 0: the pairs' strata stay
+    // correlated, and the error was 20% higher.)
+    uint32_t index(uint32_t seed) const {
+        return sobol_0(fast_owen_mirrored(sobol_0(k << (32 - bits)), seed)) >> (32 - bits);
+    }
+    // Sobol's dimension 1 mirrored (sobol_0() of sobol_1(i)): the direction numbers mirrored.
+    static uint32_t sobol_1_mirrored(uint32_t i) {
+        uint32_t x = 0;
+        for (uint32_t v = 1; i != 0; i >>= 1, v ^= v << 1) x ^= v & (0u - (i & 1));
+        return x;
+    }
+    static double unit(uint32_t mirrored) { return sobol_0(mirrored) * 0x1.0p-32; }
+    double uniform() {
+        if (dim >= sobol_draws) return Rng::uniform();
+        uint64_t key = (*keys)[size_t(dim++)];
+        // Dimension 0 mirrored is the index itself: scramble it, then mirror it.
+        return unit(fast_owen_mirrored(index(uint32_t(key)), uint32_t(key >> 32)));
+    }
+    std::pair<double, double> uniform2() {
+        if (dim + 2 > sobol_draws) return Rng::uniform2();
+        uint64_t a = (*keys)[size_t(dim)], b = (*keys)[size_t(dim + 1)];
+        dim += 2;
+        uint32_t i = index(uint32_t(a));
+        return {unit(fast_owen_mirrored(i, uint32_t(a >> 32))),
+                unit(fast_owen_mirrored(sobol_1_mirrored(i), uint32_t(b)))};
+    }
+};
+
 // The image-plane points (in pixel units) where pixel (i, j) is sampled, in order, each with
-// its sample's random stream (pixel_rng()): the pixel's centre for spp = 1; otherwise spp
-// samples in a rows x cols grid of strata (rows the largest divisor of spp not above its square
-// root), one jittered sample in each: stratified sampling (Suffern ch. 5). Their average is the
-// box-filtered pixel. The jitter takes a sample's first two numbers; a path tracer goes on
-// drawing from the same stream.
+// its sample's random stream (pixel_rng()): the pixel's centre for spp = 1; otherwise, with
+// Sampler::stratified, spp samples in a rows x cols grid of strata (rows the largest divisor
+// of spp not above its square root), one jittered sample in each: stratified sampling
+// (Suffern ch. 5), the jitter taking a sample's first two numbers; with Sampler::sobol, the
+// first spp points of the (0,2)-sequence, scrambled for this pixel (its keys drawn from the
+// pixel's stream for the sample index 2^64 - 1, which no sample has). Their average is the
+// box-filtered pixel; a path tracer goes on drawing from the sample's stream.
 template <class Sample> inline void for_each_sample(const Scene &scene, int i, int j, Sample f) {
     const int spp = scene.settings.spp;
     const uint64_t pixel = uint64_t(j) * uint64_t(scene.camera.width) + uint64_t(i);
     if (spp == 1) {
         Rng rng = pixel_rng(scene.settings.seed, pixel, 0);
         f(i + 0.5, j + 0.5, rng);
+        return;
+    }
+    if (scene.settings.sampler == Sampler::sobol) {
+        Rng keys = pixel_rng(scene.settings.seed, pixel, ~uint64_t(0));
+        const uint64_t key_x = keys.next(), key_y = keys.next();
+        const SobolStream::Keys path_keys = SobolStream::make_keys(keys);
+        int bits = 0; // the smallest m with 2^m >= spp
+        while ((int64_t(1) << bits) < spp) ++bits;
+        for (int k = 0; k < spp; ++k) {
+            SobolStream rng(pixel_rng(scene.settings.seed, pixel, uint64_t(k)), path_keys,
+                            uint32_t(k), bits);
+            double sx = i + owen_scrambled(sobol_0(uint32_t(k)), key_x, bits);
+            double sy = j + owen_scrambled(sobol_1(uint32_t(k)), key_y, bits);
+            f(sx, sy, rng);
+        }
         return;
     }
     int rows = 1;

@@ -235,7 +235,7 @@ struct LightPoint {
     double pdf_area;
 };
 
-inline LightPoint sample_area_light(const AreaLight &light, double u0, double u1, double u2) {
+inline LightPoint sample_area_light(const AreaLight &light, double u1, double u2) {
     LightPoint lp;
     if (light.sphere) {
         const Sphere &s = *light.sphere;
@@ -245,9 +245,17 @@ inline LightPoint sample_area_light(const AreaLight &light, double u0, double u1
         lp.Ng = n;
     } else {
         const Mesh &m = *light.mesh;
-        size_t t = size_t(std::upper_bound(light.cdf.begin(), light.cdf.end(), u0 * light.area) -
+        // The triangle by u1, which is then stretched back over [0, 1) within the triangle's
+        // share of the area (sample reuse, pbrt-v4 SampleDiscrete()): the pair (u1, u2) picks
+        // both the triangle and the point in it, so a pair spread evenly over the unit square
+        // (11_render.h SobolStream) is spread evenly over the whole light, a quad's two
+        // triangles included.
+        double at = u1 * light.area;
+        size_t t = size_t(std::upper_bound(light.cdf.begin(), light.cdf.end(), at) -
                           light.cdf.begin());
         t = std::min(t, m.triangles.size() - 1);
+        double below = t == 0 ? 0 : light.cdf[t - 1], share = light.cdf[t] - below;
+        u1 = std::clamp((at - below) / share, 0.0, 0x1.fffffffffffffp-1); // in [0, 1)
         const auto &tri = m.triangles[t];
         Vec3 a = m.vertices[size_t(tri[0])], b = m.vertices[size_t(tri[1])],
              c = m.vertices[size_t(tri[2])];
@@ -617,8 +625,11 @@ struct CulledQueries {
 
 // One path from the camera: the radiance it carries back along `ray`, the scene asked through
 // `queries` (SceneQueries: the lecture's; CulledQueries: the same answers, sooner).
-template <class Queries>
-inline Color trace_path(const PathContext &ctx, const Queries &queries, Ray ray, Rng &rng,
+// `rng`: the sample's random numbers (11_render.h: an Rng, or a SobolStream that stratifies
+// the first vertices' numbers across the pixel's samples); uniform2() takes the two numbers of
+// one two-dimensional choice.
+template <class Queries, class Random>
+inline Color trace_path(const PathContext &ctx, const Queries &queries, Ray ray, Random &rng,
                         RayCounts &counts) {
     const Scene &scene = ctx.scene;
     const Settings &s = scene.settings;
@@ -675,10 +686,10 @@ inline Color trace_path(const PathContext &ctx, const Queries &queries, Ray ray,
             }
             if (ctx.n_sampled > 0) {
                 int k = std::min(int(rng.uniform() * ctx.n_sampled), ctx.n_sampled - 1);
-                double u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+                auto [u1, u2] = rng.uniform2();
                 if (k < int(ctx.area_lights.size())) {
                     const AreaLight &al = ctx.area_lights[size_t(k)];
-                    LightPoint lp = sample_area_light(al, u0, u1, u2);
+                    LightPoint lp = sample_area_light(al, u1, u2);
                     LightConnection c = connect_to_light(hit.p, N, lp, ctx.pick);
                     const Vec3 &wi = c.wi;
                     if (c.cos_l > 0 && c.cos_i > 0 && dot(wi, Ng) > 0) {
@@ -708,7 +719,8 @@ inline Color trace_path(const PathContext &ctx, const Queries &queries, Ray ray,
 
         // Scatter: choose a lobe, a direction, and carry f cos / pdf along.
         BSDFSample bs;
-        double u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+        double u0 = rng.uniform();
+        auto [u1, u2] = rng.uniform2();
         if (!sample_bsdf(bsdf, wo, u0, u1, u2, bs)) break;
         if (dot(bs.wi, Ng) <= 0) break; // a smooth normal sent it into the surface
         beta = beta * bs.weight;
@@ -736,7 +748,7 @@ inline void render_tile_path(const PathContext &ctx, const Queries &queries, int
     for (int j = y0; j < y1; ++j)
         for (int i = x0; i < x1; ++i) {
             Color sum{0, 0, 0};
-            for_each_sample(scene, i, j, [&](double sx, double sy, Rng &rng) {
+            for_each_sample(scene, i, j, [&](double sx, double sy, auto &rng) {
                 ++tile.primary;
                 sum += trace_path(ctx, queries, cam.primary_ray(sx, sy), rng, tile);
             });

@@ -285,7 +285,12 @@ NB_MODULE(_core, m) {
         .def(
             "set_render",
             [](rt::Scene &s, int max_depth, double min_coefficient, int spp, uint64_t seed,
-               Triple background, Triple ambient_light) {
+               Triple background, Triple ambient_light, const std::string &sampler) {
+                if (sampler != "stratified" && sampler != "sobol")
+                    throw std::invalid_argument("sampler: expected 'stratified' or 'sobol', got '" +
+                                                sampler + "'");
+                s.settings.sampler =
+                    sampler == "sobol" ? rt::Sampler::sobol : rt::Sampler::stratified;
                 s.settings.max_depth = max_depth;
                 s.settings.min_coefficient = min_coefficient;
                 s.settings.spp = spp;
@@ -294,7 +299,7 @@ NB_MODULE(_core, m) {
                 s.settings.ambient_light = col(ambient_light);
             },
             "max_depth"_a, "min_coefficient"_a, "spp"_a, "seed"_a, "background"_a,
-            "ambient_light"_a)
+            "ambient_light"_a, "sampler"_a = "stratified")
         .def(
             "add_material",
             [](rt::Scene &s, Triple color, double ambient, double diffuse, double specular,

@@ -24,6 +24,9 @@ MAX_SPP = 1 << 20
 MAX_DEPTH = 10000
 INTEGRATORS = ("classic", "aov", "path")
 ACCELERATIONS = ("bvh", "bounding_box", "none")
+#: Where a pixel's spp > 1 samples lie (tracer/cpp/11_render.h for_each_sample()): one
+#: jittered sample in each of a grid of strata, or Sobol's (0,2)-sequence, Owen-scrambled.
+SAMPLERS = ("stratified", "sobol")
 
 
 #: How a stereo pair's two eyes make one image (slide "Stereoscopy"): side by side (left eye
@@ -91,6 +94,8 @@ class RenderSettings:
     #: How meshes are searched: a bounding volume hierarchy, only the bounding box of the whole
     #: mesh, or every triangle (the slide "Intersecting a Complex Object", step by step).
     acceleration: str = "bvh"
+    #: Where a pixel's samples lie when spp > 1 (SAMPLERS).
+    sampler: str = "stratified"
 
 
 @dataclass(frozen=True)

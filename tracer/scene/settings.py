@@ -13,6 +13,7 @@ from tracer.scene.model import (
     MAX_DEPTH,
     MAX_IMAGE_SIDE,
     MAX_SPP,
+    SAMPLERS,
     STEREO_LAYOUTS,
     Camera,
     RenderSettings,
@@ -95,4 +96,5 @@ def read_render(r: Reader, data: Any) -> RenderSettings:
         background=r.color(t, "render", "background", default=d.background),
         ambient_light=r.color(t, "render", "ambient_light", default=d.ambient_light),
         acceleration=r.choice(t, "render", "acceleration", ACCELERATIONS, default=d.acceleration),
+        sampler=r.choice(t, "render", "sampler", SAMPLERS, default=d.sampler),
     )
