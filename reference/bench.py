@@ -258,15 +258,14 @@ def suite_convergence(
     """Error against run time (reference/convergence.py): the Cornell box path traced by rtlab
     and Mitsuba, and the demo scene antialiased by rtlab, POV-Ray and Mitsuba; writes a log-log
     plot per case beside the JSON and prints the time each renderer needs to reach an error."""
-    from reference.convergence import convergence, convergence_classic, plot, summary
+    from reference.convergence import CASES, convergence, convergence_classic, plot, summary
 
     rows = []
-    cases = (("cornell", convergence()),
-             ("cornell-128", convergence(width=128, height=128,
-                                         renderers=("rtlab", "mitsuba-llvm",
-                                                    "mitsuba-llvm-stratified"))),
-             ("ex25", convergence_classic())) if engine is None else ()  # fmt: skip
-    if engine is not None:  # --workers/--scheduler: a case per task (reference/convergence.py)
+    cases: tuple[tuple[str, list[dict[str, Any]]], ...] = ()
+    if engine is None:  # the cases one after the other, here
+        run = {"path": convergence, "classic": convergence_classic}
+        cases = tuple((name, run[kind](**kwargs)) for name, kind, kwargs in CASES)
+    else:  # --workers/--scheduler: a case per task (reference/convergence.py)
         from reference.convergence import batched
 
         cases = tuple(batched(engine))

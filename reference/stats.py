@@ -60,24 +60,35 @@ def scene_hash(scene: Scene, spp: int, renderer: str) -> str:
     return hashlib.sha256(f"{data}|{spp}|{renderer}|chunks{CHUNKS}".encode()).hexdigest()[:24]
 
 
-def mitsuba_reference(scene: Scene, spp: int, *, variant: str | None = None) -> Reference:
+def mitsuba_reference(
+    scene: Scene, spp: int, *, variant: str | None = None, sampler: str | None = None
+) -> Reference:
     """Mitsuba's path tracer at ``spp`` samples per pixel, mean and per-sample variance; from
-    the cache when this scene was rendered so before by this Mitsuba."""
+    the cache when this scene was rendered so before by this Mitsuba. ``sampler``: Mitsuba's
+    sampler for every chunk (None: the converter's, independent samples); with "stratified"
+    each chunk's spp (a square: per_chunk = 256 of 4096) are a grid of jittered strata, so a
+    pixel cut by an edge has a fraction of the independent noise, while the chunks are still
+    independent renders and their spread still the variance of the mean."""
     import mitsuba as mi
 
     import converters.mitsuba as cm
 
     variant = cm.use_variant(variant)
-    key = scene_hash(scene.with_overrides(spp=spp), spp, f"mitsuba-{mi.__version__}")
+    renderer = f"mitsuba-{mi.__version__}" + (f"-{sampler}" if sampler else "")
+    key = scene_hash(scene.with_overrides(spp=spp), spp, renderer)
     path = cache_dir() / f"{key}.npz"
     if path.exists():
         data = np.load(path)
         return Reference(data["mean"], data["variance"], int(data["spp"]))
     per_chunk = max(1, spp // CHUNKS)
     d = cm.to_mitsuba_dict(scene.with_overrides(spp=per_chunk))
+    if sampler is not None:
+        d["sensor"]["sampler"] = {"type": sampler, "sample_count": per_chunk}
     mi_scene = mi.load_dict(d)
     chunks = np.stack([np.array(mi.render(mi_scene, seed=1000 + c), dtype=np.float64)[..., :3]
                        for c in range(CHUNKS)])  # fmt: skip
+    # What each chunk drew: Mitsuba's stratified sampler rounds a count up to a square.
+    per_chunk = int(mi_scene.sensors()[0].sampler().sample_count())
     mean = chunks.mean(axis=0)
     variance = chunks.var(axis=0, ddof=1) * per_chunk  # of one sample
     spp = per_chunk * CHUNKS
