@@ -202,3 +202,16 @@ def test_sobol_stratifies_the_path_s_first_numbers():
     error = np.sqrt(sobol.var(ddof=1) / 30 + strata.var(ddof=1) / 30)
     assert abs(sobol.mean() - strata.mean()) < 4 * error
     assert sobol.var(ddof=1) < strata.var(ddof=1) / 4, (sobol.var(), strata.var())
+
+
+@pytest.mark.parametrize("spp", [3, 6, 12])
+def test_sobol_with_a_count_that_is_no_power_of_two_is_unbiased(spp):
+    """The first spp points of the net (spp not a power of two) are no net, but each point is
+    uniform on the pixel (Owen's scrambling), so the estimate is still unbiased: a quad over
+    37% of the pixel's width averages to 0.37 over 80 seeds, within 4 standard errors (each
+    render's hits are a count out of spp, 1 or 2 of 3 at spp = 3: their spread is measured)."""
+    x0, x1, top, bottom = pixel_rect(0, 0)
+    quad = [rect(x0 - 1, x0 + (x1 - x0) * 0.37, bottom - 1, top + 1)]
+    values = np.array([render_sobol(quad, spp, s)[0, 0] for s in range(80)], dtype=np.float64)
+    error = values.std(ddof=1) / np.sqrt(values.size)
+    assert abs(values.mean() - 0.37) < 4 * error, (values.mean(), error)
