@@ -81,11 +81,25 @@ inline unsigned lane_bits(Mask m) {
 }
 inline int count(Mask m) { return __builtin_popcount(lane_bits(m)); }
 inline bool any(Mask m) { return lane_bits(m) != 0; }
+// Each lane's correctly rounded square root, as std::sqrt gives it. Written as a loop over the
+// lanes, GCC vectorised it at its preferred width, 256 bits on Intel even with AVX-512: two
+// vsqrtpd on ymm halves stored to the stack and read back as one zmm, a load that cannot be
+// forwarded from two stores, and the stall held the instruction after a point light's
+// normalisation at 12% of trace_level's time on Ex 25 (perf, issue 12). So one instruction where
+// the machine has it; elsewhere the loop, which needs -fno-math-errno (no errno check per lane).
 inline Lanes sqrt(Lanes x) {
+#if defined(__AVX512F__)
+    static_assert(sizeof(Lanes) == sizeof(__m512d));
+    __m512d v;
+    std::memcpy(&v, &x, sizeof v);
+    v = _mm512_mask_sqrt_pd(v, __mmask8(0xff), v); // not _mm512_sqrt_pd: GCC 12 warns on its undefined source
+    std::memcpy(&x, &v, sizeof v);
+    return x;
+#else
     Lanes r;
-    // One vsqrtpd (built -fno-math-errno, so no per-lane errno check stops the vectoriser).
     for (int k = 0; k < rays_per_packet; ++k) r[k] = std::sqrt(x[k]);
     return r;
+#endif
 }
 inline Lanes fabs(Lanes x) {
     Mask bits;
