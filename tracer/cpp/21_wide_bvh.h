@@ -826,6 +826,14 @@ template <class Block> struct Search8 {
         const K8 keys = (__builtin_convertvector(float_bits_down(t_near), K8) << 32 |
                          __builtin_convertvector(bit_cast<U8>(node.child), K8)) &
                         bit_cast<K8>(hit);
+        if (__builtin_popcount(bits) == 2) { // two: one compare, not the six layers of the sort
+            const uint64_t a = keys[__builtin_ctz(bits)], b = keys[31 - __builtin_clz(bits)];
+            const uint64_t far = a > b ? a : b, near = a > b ? b : a;
+            prefetch(uint32_t(far)), prefetch(uint32_t(near));
+            stack[top++] = far;
+            next = uint32_t(near);
+            return;
+        }
         const K8 sorted = sort_descending(keys);
         const int n = __builtin_popcount(bits);
         for (int k = 0; k < n; ++k) prefetch(uint32_t(sorted[k]));
