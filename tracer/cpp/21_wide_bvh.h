@@ -336,8 +336,9 @@ inline D8 to_double(const F8 &f) {
 #endif
 }
 
-// slab_test() (14_box.h) for the eight children of a node: the same operations, lane by lane.
-inline M8 slab_test(const Node8 &node, const SlabRay &r, const Interval &range, D8 &t_near) {
+// slab_test() (14_box.h) for the eight children of a node: the same operations, lane by lane
+// (a name of its own: a lesson's region is named by its file, lesson and function).
+inline M8 slab_test8(const Node8 &node, const SlabRay &r, const Interval &range, D8 &t_near) {
     // BEGIN SOLUTION L09
     // PROMPT: A copy, lane by lane, of slab_test() for the eight children of a wide node.
     // Each plane converted to double (exactly) as it is read: only the six planes used.
@@ -814,7 +815,7 @@ template <class Block> struct Search8 {
     void node(uint32_t index) {
         const Node8 &node = bvh.nodes8[index];
         D8 t_near;
-        const M8 hit = slab_test(node, sr, range, t_near);
+        const M8 hit = slab_test8(node, sr, range, t_near);
         const unsigned bits = lane_bits8(hit);
         box_tests += bvh8_width; // (lanes without a child count too: the same instruction)
         if (bits == 0) return;
