@@ -775,9 +775,21 @@ template <class Block> struct Search8 {
         stack[top++] = 0; // the root, entered at t >= 0
     }
 
+    // Every line of the block or node a code names, without a branch on which (a node's
+    // children mix the two unpredictably): addresses as integers, chosen by a conditional move;
+    // a line that only one of the two has is asked for in the other as a repeat of its first.
     void prefetch(uint32_t code) const {
-        if (code & leaf_code) prefetch_lines(&blocks[code & ~leaf_code], sizeof(Block));
-        else prefetch_lines(&bvh.nodes8[code], sizeof(Node8));
+        static_assert(sizeof(Node8) == 4 * 64 && sizeof(Block) >= 3 * 64 &&
+                      sizeof(Block) <= 5 * 64);
+        const bool leaf = code & leaf_code;
+        const uintptr_t index = code & ~leaf_code;
+        const uintptr_t p = leaf ? uintptr_t(blocks) + index * sizeof(Block)
+                                 : uintptr_t(bvh.nodes8.data()) + index * sizeof(Node8);
+        auto line = [p](uintptr_t at) { __builtin_prefetch(reinterpret_cast<void *>(p + at)); };
+        line(0), line(64), line(128);
+        const bool four = !leaf || sizeof(Block) > 3 * 64, five = leaf && sizeof(Block) > 4 * 64;
+        line(four ? 3 * 64 : 0);
+        if (sizeof(Block) > 4 * 64) line(five ? 4 * 64 : 0);
     }
 
     // One node or leaf; false when the search is over.
