@@ -969,6 +969,9 @@ inline void closest_mesh_hits(const Scene &scene, const double *origins,
             : nullptr;
     auto ray_at = [&](size_t i) {
         const double *o = origins + 3 * i, *d = directions + 3 * i;
+        // The rays 64 on, asked for now: the batch's 48 bytes a ray come from main memory,
+        // and a ray's set-up waited for them (1.02x).
+        if (i + 64 < n) __builtin_prefetch(o + 3 * 64), __builtin_prefetch(d + 3 * 64);
         return Ray{{o[0], o[1], o[2]}, {d[0], d[1], d[2]}};
     };
     auto interleaved = [&](size_t start, size_t end, RayCounts &counts) {
