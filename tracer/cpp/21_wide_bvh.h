@@ -18,6 +18,12 @@
 //   as leaf_hit() does: a leaf gives exactly leaf_hit()'s answer, and the hit record is the
 //   one-ray code's.
 //
+// - A mesh that is not flat (more than one wide node) is searched in an eight-wide tree
+//   collapsed the same way instead (Node8, Search8 below: one AVX-512 register of 8 doubles per
+//   slab plane, children ordered by a bitonic sort of integer keys), its leaves in float where
+//   every vertex is a float (FloatBlock, converted back exactly): the same boxes in a shallower
+//   tree and the same triangle tests, so the same answers, in fewer, cheaper steps (issue 12).
+//
 // What may differ from Mesh::traverse() is only the order in which leaves are visited (nearest
 // child box first, among four instead of two). Where two triangles are hit at the same t (an
 // edge they share) a traversal keeps the one it visits last, so either may be kept; the test
@@ -36,6 +42,12 @@
 #include <optional>
 #include <thread>
 #include <vector>
+
+#include <cstdlib>
+#include <new>
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 #include <immintrin.h>
 
@@ -226,6 +238,217 @@ inline bool block_hits(const TriangleBlock &block, const Mesh &mesh, const Water
     return found;
 }
 
+// -- The eight-wide hierarchy (issue 12) -------------------------------------------------------
+// The same collapse with eight children a node (Embree's BVH8; Benthin, Woop, Wald and Afra,
+// "Improved Two-Level BVHs using Partial Re-Braiding", use it on AVX-512 too): an incoherent ray
+// through the bunny visited 12 four-wide nodes, each one step of fixed cost (the node's set-up,
+// its children's order, a return to the scheduler), and was bound by that cost rather than by
+// memory (the same rays took as long with every node already in cache). Eight children's boxes
+// are one AVX-512 register of 8 doubles per slab plane; on a machine without AVX-512 the
+// compiler splits each vector in two (AVX2) or four (SSE2), the same arithmetic.
+constexpr int bvh8_width = 8;
+typedef double D8 __attribute__((vector_size(bvh8_width * sizeof(double))));
+typedef float F8 __attribute__((vector_size(bvh8_width * sizeof(float))));
+typedef int64_t M8 __attribute__((vector_size(bvh8_width * sizeof(int64_t))));
+typedef uint64_t K8 __attribute__((vector_size(bvh8_width * sizeof(uint64_t))));
+typedef uint32_t U8 __attribute__((vector_size(bvh8_width * sizeof(uint32_t))));
+
+// A child's code: an inner child's Node8 index (never 0, the root's), or leaf_code | its first
+// block. Never 0, so that a search key (below) of a child is never 0.
+constexpr uint32_t leaf_code = 0x80000000u;
+
+// Eight children's boxes as WideNode's four (float, rounded outward, empty boxes in unused
+// lanes): 192 bytes of planes and 32 of codes, four cache lines.
+struct alignas(64) Node8 {
+    F8 planes[2][3];
+    uint32_t child[bvh8_width];
+};
+
+// Four triangles of a leaf as TriangleBlock holds them, in float: for a mesh whose vertices are
+// all floats (a scanned mesh read from a PLY file of floats, like the bunny), each converts back
+// to the very same double, so a block tested in double is TriangleBlock's test bit for bit, in
+// 192 bytes (three cache lines) instead of 320. A mesh with any other vertex keeps
+// TriangleBlock.
+struct alignas(64) FloatBlock {
+    F4 p[3][3];
+    int32_t leaf[bvh_width];
+    int32_t more;
+};
+static_assert(sizeof(FloatBlock) == 3 * 64, "a float triangle block is three cache lines");
+
+// A float block's vertex as sheared_candidates() reads it, axis by axis: each lane converted to
+// double (exactly) when it is read, so only the axes it asks for are converted, straight from
+// the block (not first all nine into a local array, which the compiler kept in memory).
+struct FloatVertexLanes {
+    const F4 *axes;
+    D4 operator[](int axis) const {
+#if defined(__AVX__)
+        return bit_cast<D4>(_mm256_cvtps_pd(bit_cast<__m128>(axes[axis])));
+#else
+        return __builtin_convertvector(axes[axis], D4);
+#endif
+    }
+};
+
+inline M4 block_candidates(const TriangleBlock &b, const WatertightRay &wr, const Interval &range) {
+    return triangle_candidates(b, wr, range);
+}
+inline M4 block_candidates(const FloatBlock &b, const WatertightRay &wr, const Interval &range) {
+    const FloatVertexLanes p0{b.p[0]}, p1{b.p[1]}, p2{b.p[2]};
+    return sheared_candidates<M4>(p0, p1, p2, wr.o, wr.kx, wr.ky, wr.kz, wr.Sx, wr.Sy, wr.Sz,
+                                  range.min, range.max);
+}
+
+// block_hits() for either kind of block: the same candidates, the same re-test, in leaf order.
+// The loop runs over the candidates' bits only: a block's triangles (2 to 4) and its
+// candidates (a tenth of a candidate a ray, over all its blocks) are counted and picked without
+// a branch per lane, which the lanes' mix of outcomes made mispredict.
+template <class Block>
+inline bool block_hits_of(const Block &block, const Mesh &mesh, const WatertightRay &wr,
+                          Interval &range, TriangleHit &best, int &best_triangle,
+                          uint64_t &primitive_tests, bool any) {
+    const M4 candidates = block_candidates(block, wr, range);
+    unsigned real = 0, picked = 0;
+    for (int l = 0; l < bvh_width; ++l) {
+        real |= unsigned(block.leaf[l] >= 0) << l;
+        picked |= unsigned(candidates[l] != 0) << l;
+    }
+    primitive_tests += uint64_t(__builtin_popcount(real));
+    bool found = false;
+    for (unsigned bits = picked & real; bits != 0; bits &= bits - 1) {
+        const int l = __builtin_ctz(bits);
+        Vec3 v[3];
+        for (int k = 0; k < 3; ++k)
+            v[k] = {double(block.p[k][0][l]), double(block.p[k][1][l]), double(block.p[k][2][l])};
+        TriangleHit th;
+        if (intersect_triangle(v[0], v[1], v[2], wr, range, th)) {
+            best = th;
+            best_triangle = mesh.order[size_t(block.leaf[l])];
+            range.max = th.t;
+            found = true;
+            if (any) return true;
+        }
+    }
+    return found;
+}
+
+// Eight floats to eight doubles (exactly), one AVX-512 instruction where there is one (the
+// vector extension's conversion became two halves and a merge).
+inline D8 to_double(const F8 &f) {
+#if defined(__AVX512F__)
+    return bit_cast<D8>(_mm512_maskz_cvtps_pd(0xff, bit_cast<__m256>(f)));
+#else
+    return __builtin_convertvector(f, D8);
+#endif
+}
+
+// slab_test() (14_box.h) for the eight children of a node: the same operations, lane by lane
+// (a name of its own: a lesson's region is named by its file, lesson and function).
+inline M8 slab_test8(const Node8 &node, const SlabRay &r, const Interval &range, D8 &t_near) {
+    // BEGIN SOLUTION L09
+    // PROMPT: A copy, lane by lane, of slab_test() for the eight children of a wide node.
+    // Each plane converted to double (exactly) as it is read: only the six planes used.
+    D8 tx0 = (to_double(node.planes[r.near_x][0]) - r.o.x) * r.inv_d.x;
+    D8 tx1 = (to_double(node.planes[1 - r.near_x][0]) - r.o.x) * r.inv_d_far.x;
+    D8 ty0 = (to_double(node.planes[r.near_y][1]) - r.o.y) * r.inv_d.y;
+    D8 ty1 = (to_double(node.planes[1 - r.near_y][1]) - r.o.y) * r.inv_d_far.y;
+    D8 tz0 = (to_double(node.planes[r.near_z][2]) - r.o.z) * r.inv_d.z;
+    D8 tz1 = (to_double(node.planes[1 - r.near_z][2]) - r.o.z) * r.inv_d_far.z;
+    D8 lo = D8{} + range.min, hi = D8{} + range.max;
+    lo = tx0 > lo ? tx0 : lo, hi = tx1 < hi ? tx1 : hi;
+    lo = ty0 > lo ? ty0 : lo, hi = ty1 < hi ? ty1 : hi;
+    lo = tz0 > lo ? tz0 : lo, hi = tz1 < hi ? tz1 : hi;
+    t_near = lo;
+    return lo <= hi;
+    // END SOLUTION
+}
+
+// The lanes of a mask as bits (lane k: bit k).
+inline unsigned lane_bits8(M8 m) {
+#if defined(__AVX512DQ__)
+    return _mm512_movepi64_mask(bit_cast<__m512i>(m));
+#else
+    unsigned b = 0;
+    for (int k = 0; k < bvh8_width; ++k) b |= unsigned(m[k] != 0) << k;
+    return b;
+#endif
+}
+
+// Each lane's t (>= 0, as a slab test's entry is) as the bits of the largest float <= t. For
+// non-negative floats the order of their bits is the order of their values, so a search key
+// (t's bits above a child's code) orders children by entry distance in one integer compare;
+// the float is at most t, so a child skipped for entering beyond a hit (t > range.max) is one
+// the double t would skip too.
+inline U8 float_bits_down(D8 t) {
+#if defined(__AVX512F__)
+    return bit_cast<U8>(
+        _mm512_maskz_cvt_roundpd_ps(0xff, bit_cast<__m512d>(t),
+                                    _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC));
+#else
+    const F8 f = __builtin_convertvector(t, F8); // to nearest, then one step down where above
+    const M8 above = __builtin_convertvector(f, D8) > t;
+    return bit_cast<U8>(f) + __builtin_convertvector(above, U8); // true is -1: one ulp down
+#endif
+}
+
+// Search keys in descending order (the farthest child first, keys of 0 last): AVX-512's
+// bitonic network (Batcher 1968) of six compare-exchange layers, else an insertion sort.
+template <int k, int j> inline K8 bitonic_layer(K8 v) {
+    // Lane i's partner is i ^ j; in a block of k lanes that sorts descending (i & k == 0) the
+    // lower lane takes the larger key, in one that sorts ascending the smaller.
+    const K8 partner = {0 ^ j, 1 ^ j, 2 ^ j, 3 ^ j, 4 ^ j, 5 ^ j, 6 ^ j, 7 ^ j};
+    M8 larger;
+    for (int i = 0; i < 8; ++i) larger[i] = ((i & j) == 0) == ((i & k) == 0) ? -1 : 0;
+    const K8 p = __builtin_shuffle(v, partner);
+    const K8 hi = v > p ? v : p, lo = v > p ? p : v;
+    return larger ? hi : lo;
+}
+inline K8 sort_descending(K8 keys) {
+#if defined(__AVX512F__)
+    keys = bitonic_layer<2, 1>(keys);
+    keys = bitonic_layer<4, 2>(keys), keys = bitonic_layer<4, 1>(keys);
+    keys = bitonic_layer<8, 4>(keys), keys = bitonic_layer<8, 2>(keys);
+    return bitonic_layer<8, 1>(keys);
+#else
+    for (int i = 1; i < bvh8_width; ++i) {
+        const uint64_t x = keys[i];
+        int k = i;
+        for (; k > 0 && keys[k - 1] < x; --k) keys[k] = keys[k - 1];
+        keys[k] = x;
+    }
+    return keys;
+#endif
+}
+
+// Memory for the eight-wide tree on 2 MiB pages where the system lends them (Linux's transparent
+// huge pages, asked for with madvise): an incoherent ray's nodes and blocks lie on pages all
+// over the tree's megabytes, and with 4 KiB pages nearly every one was also a miss in the
+// address translation cache, whose page walk the prefetch must wait for.
+template <class T> struct HugePageAllocator {
+    typedef T value_type;
+    static constexpr size_t huge = size_t(2) << 20;
+    HugePageAllocator() = default;
+    template <class U> HugePageAllocator(const HugePageAllocator<U> &) {}
+    T *allocate(size_t n) {
+        const size_t bytes = n * sizeof(T);
+        if (bytes < huge / 2) return static_cast<T *>(::operator new(bytes, std::align_val_t(64)));
+        const size_t rounded = (bytes + huge - 1) / huge * huge;
+        void *p = std::aligned_alloc(huge, rounded);
+        if (p == nullptr) throw std::bad_alloc();
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+        madvise(p, rounded, MADV_HUGEPAGE); // a hint: without it, ordinary pages
+#endif
+        return static_cast<T *>(p);
+    }
+    void deallocate(T *p, size_t n) {
+        if (n * sizeof(T) < huge / 2) ::operator delete(p, std::align_val_t(64));
+        else std::free(p);
+    }
+    template <class U> bool operator==(const HugePageAllocator<U> &) const { return true; }
+    template <class U> bool operator!=(const HugePageAllocator<U> &) const { return false; }
+};
+template <class T> using HugeVector = std::vector<T, HugePageAllocator<T>>;
+
 struct WideBVH : MeshAccelerator {
     std::vector<WideNode> nodes; // nodes[0] is the root
     std::vector<TriangleBlock> blocks;
@@ -248,6 +471,92 @@ struct WideBVH : MeshAccelerator {
             collapse(mesh, 0);
         flat = nodes.size() == 1;
         for (int c = 0; c < nodes[0].children; ++c) flat = flat && nodes[0].child[c] < 0;
+        if (flat) return;
+        // Any other mesh is searched in the eight-wide tree only (Search8).
+        build8(mesh);
+        nodes = {}, blocks = {};
+    }
+
+    // -- the eight-wide tree (Search8), for every mesh that is not flat --------------------
+    HugeVector<Node8> nodes8;                // nodes8[0] is the root
+    HugeVector<TriangleBlock> double_blocks; // its leaves' blocks, for a mesh of doubles
+    HugeVector<FloatBlock> float_blocks;     // or for a mesh of floats (float_vertices)
+    bool float_vertices = false;
+
+    void build8(const Mesh &mesh) {
+        float_vertices = true;
+        for (const Vec3 &v : mesh.leaf_vertices)
+            for (int axis = 0; axis < 3; ++axis)
+                float_vertices = float_vertices && double(float(v[axis])) == v[axis];
+        nodes8.reserve(mesh.nodes.size() / 4 + 1);
+        if (mesh.nodes[0].count > 0) { // one leaf: a root with that one child
+            nodes8.emplace_back();
+            set_child8(mesh, 0, 0, 0);
+        } else
+            collapse8(mesh, 0);
+    }
+
+    static void set_box8(Node8 &w, int c, const AABB &box) {
+        for (int axis = 0; axis < 3; ++axis) {
+            if (c == 0)
+                for (int l = 0; l < bvh8_width; ++l)
+                    w.planes[0][axis][l] = std::numeric_limits<float>::infinity(),
+                    w.planes[1][axis][l] = -std::numeric_limits<float>::infinity();
+            w.planes[0][axis][c] = float_down(box.min[axis]);
+            w.planes[1][axis][c] = float_up(box.max[axis]);
+        }
+        if (c == 0)
+            for (int l = 0; l < bvh8_width; ++l) w.child[l] = leaf_code; // unused: never hit
+    }
+
+    // collapse() with eight children a node.
+    int collapse8(const Mesh &mesh, int binary) {
+        const int index = int(nodes8.size());
+        nodes8.emplace_back();
+        int kids[bvh8_width] = {binary + 1, mesh.nodes[size_t(binary)].first};
+        int n = 2;
+        while (n < bvh8_width) {
+            int open = -1;
+            double largest = -1;
+            for (int c = 0; c < n; ++c) {
+                const BVHNode &k = mesh.nodes[size_t(kids[c])];
+                if (k.count == 0 && k.bounds.area() > largest) largest = k.bounds.area(), open = c;
+            }
+            if (open < 0) break;
+            const int opened = kids[open];
+            for (int c = n; c > open + 1; --c) kids[c] = kids[c - 1];
+            kids[open] = opened + 1;
+            kids[open + 1] = mesh.nodes[size_t(opened)].first;
+            ++n;
+        }
+        for (int c = 0; c < n; ++c) set_child8(mesh, index, c, kids[c]);
+        return index;
+    }
+
+    void set_child8(const Mesh &mesh, int index, int c, int binary) {
+        const BVHNode &k = mesh.nodes[size_t(binary)];
+        set_box8(nodes8[size_t(index)], c, k.bounds);
+        if (k.count == 0) {
+            int child = collapse8(mesh, binary);
+            nodes8[size_t(index)].child[c] = uint32_t(child);
+            return;
+        }
+        const size_t first = float_vertices ? float_blocks.size() : double_blocks.size();
+        nodes8[size_t(index)].child[c] = leaf_code | uint32_t(first);
+        for (int f = k.first; f < k.first + k.count; f += bvh_width) {
+            const TriangleBlock b = make_block(mesh, f, k.first + k.count);
+            if (!float_vertices) {
+                double_blocks.push_back(b);
+                continue;
+            }
+            FloatBlock fb{};
+            for (int v = 0; v < 3; ++v)
+                for (int axis = 0; axis < 3; ++axis)
+                    fb.p[v][axis] = __builtin_convertvector(b.p[v][axis], F4);
+            for (int l = 0; l < bvh_width; ++l) fb.leaf[l] = b.leaf[l];
+            fb.more = b.more;
+            float_blocks.push_back(fb);
+        }
     }
 
     // Lane c of a node's boxes: `box` rounded outward to float (lanes after c: empty boxes).
@@ -445,9 +754,117 @@ struct WideSearch {
     }
 };
 
-inline bool WideBVH::traverse(const Mesh &mesh, const Ray &ray, Interval range, TriangleHit &best,
-                              int &best_triangle, RayCounts &counts, bool any) const {
-    WideSearch search(*this, mesh, ray, range, any);
+// One ray's search of the eight-wide tree, a node or a leaf a step, as WideSearch: the children
+// a node's ray meets ordered by entry distance (search keys, sort_descending()), the nearest
+// taken next without going through the stack, the others pushed farthest first.
+template <class Block> struct Search8 {
+    const WideBVH &bvh;
+    const Block *blocks;
+    const Mesh &mesh;
+    const WatertightRay wr;
+    const SlabRay sr;
+    Interval range;
+    const bool any;
+    uint32_t next = 0; // the child to visit next (0: pop one from the stack)
+    int top = 0;
+    TriangleHit best{};
+    int best_triangle = -1;
+    bool found = false;
+    uint64_t box_tests = 0, primitive_tests = 0;
+    // A node leaves up to 7 children on the stack and stores 8 keys: one per level of the
+    // binary tree below it at most (a wide node is one level or more below its parent).
+    uint64_t stack[(bvh8_width - 1) * (Mesh::max_tree_depth + 1) + bvh8_width];
+
+    Search8(const WideBVH &bvh, const Block *blocks, const Mesh &mesh, const Ray &ray,
+            Interval range, bool any)
+        : bvh(bvh), blocks(blocks), mesh(mesh), wr(ray), sr(ray), range(range), any(any) {
+        stack[top++] = 0; // the root, entered at t >= 0
+    }
+
+    // Every line of the block or node a code names, without a branch on which (a node's
+    // children mix the two unpredictably): addresses as integers, chosen by a conditional move;
+    // a line that only one of the two has is asked for in the other as a repeat of its first.
+    void prefetch(uint32_t code) const {
+        static_assert(sizeof(Node8) == 4 * 64 && sizeof(Block) >= 3 * 64 &&
+                      sizeof(Block) <= 5 * 64);
+        const bool leaf = code & leaf_code;
+        const uintptr_t index = code & ~leaf_code;
+        const uintptr_t p = leaf ? uintptr_t(blocks) + index * sizeof(Block)
+                                 : uintptr_t(bvh.nodes8.data()) + index * sizeof(Node8);
+        auto line = [p](uintptr_t at) { __builtin_prefetch(reinterpret_cast<void *>(p + at)); };
+        line(0), line(64), line(128);
+        const bool four = !leaf || sizeof(Block) > 3 * 64, five = leaf && sizeof(Block) > 4 * 64;
+        line(four ? 3 * 64 : 0);
+        if (sizeof(Block) > 4 * 64) line(five ? 4 * 64 : 0);
+    }
+
+    // One node or leaf; false when the search is over.
+    bool step() {
+        uint32_t code = next;
+        next = 0;
+        if (code == 0) {
+            for (;;) {
+                if (top == 0) return false;
+                const uint64_t key = stack[--top];
+                if (double(bit_cast<float>(uint32_t(key >> 32))) <= range.max) {
+                    code = uint32_t(key);
+                    break;
+                }
+            }
+        }
+        if (code & leaf_code) return leaf(code & ~leaf_code);
+        node(code);
+        return next != 0 || top > 0;
+    }
+
+    bool leaf(uint32_t first_block) {
+        for (uint32_t b = first_block, more = 1; more; ++b) {
+            const Block &block = blocks[b];
+            more = uint32_t(block.more);
+            if (block_hits_of(block, mesh, wr, range, best, best_triangle, primitive_tests,
+                              any)) {
+                found = true;
+                if (any) return top = 0, false;
+            }
+        }
+        return top > 0;
+    }
+
+    void node(uint32_t index) {
+        const Node8 &node = bvh.nodes8[index];
+        D8 t_near;
+        const M8 hit = slab_test8(node, sr, range, t_near);
+        const unsigned bits = lane_bits8(hit);
+        box_tests += bvh8_width; // (lanes without a child count too: the same instruction)
+        if (bits == 0) return;
+        if ((bits & (bits - 1)) == 0) { // one child: next, no key
+            next = node.child[__builtin_ctz(bits)];
+            prefetch(next);
+            return;
+        }
+        const K8 keys = (__builtin_convertvector(float_bits_down(t_near), K8) << 32 |
+                         __builtin_convertvector(bit_cast<U8>(node.child), K8)) &
+                        bit_cast<K8>(hit);
+        if (__builtin_popcount(bits) == 2) { // two: one compare, not the six layers of the sort
+            const uint64_t a = keys[__builtin_ctz(bits)], b = keys[31 - __builtin_clz(bits)];
+            const uint64_t far = a > b ? a : b, near = a > b ? b : a;
+            prefetch(uint32_t(far)), prefetch(uint32_t(near));
+            stack[top++] = far;
+            next = uint32_t(near);
+            return;
+        }
+        const K8 sorted = sort_descending(keys);
+        const int n = __builtin_popcount(bits);
+        for (int k = 0; k < n; ++k) prefetch(uint32_t(sorted[k]));
+        __builtin_memcpy(&stack[top], &sorted, sizeof(sorted));
+        top += n - 1;
+        next = uint32_t(sorted[n - 1]);
+    }
+};
+
+// A search (WideSearch, Search8) run to its end, its counts and answer handed over.
+template <class Search>
+inline bool finish(Search &search, TriangleHit &best, int &best_triangle, RayCounts &counts) {
     while (search.step()) {
     }
     counts.box_tests += search.box_tests;
@@ -455,6 +872,60 @@ inline bool WideBVH::traverse(const Mesh &mesh, const Ray &ray, Interval range, 
     if (!search.found) return false;
     best = search.best, best_triangle = search.best_triangle;
     return true;
+}
+
+inline bool WideBVH::traverse(const Mesh &mesh, const Ray &ray, Interval range, TriangleHit &best,
+                              int &best_triangle, RayCounts &counts, bool any) const {
+    if (nodes8.empty()) {
+        WideSearch search(*this, mesh, ray, range, any);
+        return finish(search, best, best_triangle, counts);
+    }
+    if (float_vertices) {
+        Search8<FloatBlock> search(*this, float_blocks.data(), mesh, ray, range, any);
+        return finish(search, best, best_triangle, counts);
+    }
+    Search8<TriangleBlock> search(*this, double_blocks.data(), mesh, ray, range, any);
+    return finish(search, best, best_triangle, counts);
+}
+
+// Rays start to end of a batch (closest_mesh_hits()) searched in_flight at a time, a step each
+// in turn, so that each ray's next node, asked for when it was pushed, has come from memory by
+// the time its turn comes again. `make` starts a ray's search in a slot.
+template <class Search, class Make>
+inline void interleaved_searches(const Mesh &mesh, size_t start, size_t end, Make make,
+                                 double *t_out, int32_t *object_out, int32_t *triangle_out,
+                                 RayCounts &counts) {
+    // 16: the eight-wide search takes fewer, cheaper steps than the four-wide one, so more rays
+    // must take turns to cover a memory latency (measured: 8 rays 7% slower than 16, 24 and 32
+    // no faster).
+    constexpr int in_flight = 16;
+    std::optional<Search> slot[in_flight];
+    size_t ray_of[in_flight] = {}, i = start;
+    int live = 0;
+    auto begin = [&](int k) {
+        if (i >= end) return;
+        make(slot[k], i);
+        ray_of[k] = i++;
+        ++live;
+    };
+    for (int k = 0; k < in_flight; ++k) begin(k);
+    while (live > 0)
+        for (int k = 0; k < in_flight; ++k) {
+            if (!slot[k] || slot[k]->step()) continue;
+            const Search &done = *slot[k];
+            const size_t r = ray_of[k];
+            const int t = done.best_triangle;
+            t_out[r] = done.found ? done.best.t : infinity;
+            object_out[r] = !done.found ? -1
+                            : mesh.triangle_object.empty() ? mesh.object
+                                                           : mesh.triangle_object[size_t(t)];
+            triangle_out[r] = done.found ? t : -1;
+            counts.box_tests += done.box_tests;
+            counts.primitive_tests += done.primitive_tests;
+            slot[k].reset();
+            --live;
+            begin(k);
+        }
 }
 
 // The wide hierarchy of a mesh built with Acceleration::bvh (none for the other kinds, which
@@ -486,49 +957,48 @@ inline void closest_mesh_hits(const Scene &scene, const double *origins,
         if (const auto *mesh = dynamic_cast<const Mesh *>(object.get())) meshes.push_back(mesh);
     constexpr size_t chunk = 4096; // rays per turn: one atomic increment per 4096 rays
     std::atomic<size_t> next{0};
-    // One mesh with a wide hierarchy: in_flight rays take turns, a step each (WideSearch), so
-    // that each ray's next node, asked for when it was pushed, has come from memory by the
-    // time its turn comes again. Incoherent rays wait on memory: 12 wide nodes and 8 triangles
-    // a ray on the bunny took 1.2 us, a main-memory latency for each. Each search is the one
-    // traverse() makes, so the answers are the same.
+    // One mesh with a wide hierarchy: in_flight rays take turns, a step each (Search8, or
+    // WideSearch for a flat mesh), so that each ray's next node, asked for when it was pushed,
+    // has come from memory by the time its turn comes again. Incoherent rays wait on memory: 12
+    // wide nodes and 8 triangles a ray on the bunny took 1.2 us, a main-memory latency for each;
+    // one ray at a time through the eight-wide tree was still 1.6x slower than 16 taking turns.
+    // Each search is the one traverse() makes, so the answers are the same.
     const WideBVH *wide =
         meshes.size() == 1 && meshes[0]->packets
             ? dynamic_cast<const WideBVH *>(meshes[0]->accelerator.get())
             : nullptr;
     auto ray_at = [&](size_t i) {
         const double *o = origins + 3 * i, *d = directions + 3 * i;
+        // The rays 64 on, asked for now: the batch's 48 bytes a ray come from main memory,
+        // and a ray's set-up waited for them (1.02x).
+        if (i + 64 < n) __builtin_prefetch(o + 3 * 64), __builtin_prefetch(d + 3 * 64);
         return Ray{{o[0], o[1], o[2]}, {d[0], d[1], d[2]}};
     };
     auto interleaved = [&](size_t start, size_t end, RayCounts &counts) {
-        constexpr int in_flight = 8;
         const Mesh &mesh = *meshes[0];
-        std::optional<WideSearch> slot[in_flight];
-        size_t ray_of[in_flight] = {}, i = start;
-        int live = 0;
-        auto begin = [&](int k) {
-            if (i >= end) return;
-            slot[k].emplace(*wide, mesh, ray_at(i), Interval{0, infinity}, false);
-            ray_of[k] = i++;
-            ++live;
-        };
-        for (int k = 0; k < in_flight; ++k) begin(k);
-        while (live > 0)
-            for (int k = 0; k < in_flight; ++k) {
-                if (!slot[k] || slot[k]->step()) continue;
-                const WideSearch &done = *slot[k];
-                const size_t r = ray_of[k];
-                const int t = done.best_triangle;
-                t_out[r] = done.found ? done.best.t : infinity;
-                object_out[r] = !done.found ? -1
-                                : mesh.triangle_object.empty() ? mesh.object
-                                                               : mesh.triangle_object[size_t(t)];
-                triangle_out[r] = done.found ? t : -1;
-                counts.box_tests += done.box_tests;
-                counts.primitive_tests += done.primitive_tests;
-                slot[k].reset();
-                --live;
-                begin(k);
-            }
+        const Interval all{0, infinity};
+        if (wide->nodes8.empty()) {
+            interleaved_searches<WideSearch>(
+                mesh, start, end,
+                [&](std::optional<WideSearch> &s, size_t i) {
+                    s.emplace(*wide, mesh, ray_at(i), all, false);
+                },
+                t_out, object_out, triangle_out, counts);
+        } else if (wide->float_vertices) {
+            interleaved_searches<Search8<FloatBlock>>(
+                mesh, start, end,
+                [&](std::optional<Search8<FloatBlock>> &s, size_t i) {
+                    s.emplace(*wide, wide->float_blocks.data(), mesh, ray_at(i), all, false);
+                },
+                t_out, object_out, triangle_out, counts);
+        } else {
+            interleaved_searches<Search8<TriangleBlock>>(
+                mesh, start, end,
+                [&](std::optional<Search8<TriangleBlock>> &s, size_t i) {
+                    s.emplace(*wide, wide->double_blocks.data(), mesh, ray_at(i), all, false);
+                },
+                t_out, object_out, triangle_out, counts);
+        }
     };
     auto work = [&] {
         RayCounts counts;
