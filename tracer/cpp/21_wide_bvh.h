@@ -513,22 +513,8 @@ struct WideBVH : MeshAccelerator {
     int collapse8(const Mesh &mesh, int binary) {
         const int index = int(nodes8.size());
         nodes8.emplace_back();
-        int kids[bvh8_width] = {binary + 1, mesh.nodes[size_t(binary)].first};
-        int n = 2;
-        while (n < bvh8_width) {
-            int open = -1;
-            double largest = -1;
-            for (int c = 0; c < n; ++c) {
-                const BVHNode &k = mesh.nodes[size_t(kids[c])];
-                if (k.count == 0 && k.bounds.area() > largest) largest = k.bounds.area(), open = c;
-            }
-            if (open < 0) break;
-            const int opened = kids[open];
-            for (int c = n; c > open + 1; --c) kids[c] = kids[c - 1];
-            kids[open] = opened + 1;
-            kids[open + 1] = mesh.nodes[size_t(opened)].first;
-            ++n;
-        }
+        int kids[bvh8_width];
+        const int n = wide_children(mesh, binary, bvh8_width, kids);
         for (int c = 0; c < n; ++c) set_child8(mesh, index, c, kids[c]);
         return index;
     }
@@ -628,15 +614,14 @@ struct WideBVH : MeshAccelerator {
         return found;
     }
 
-    // A wide node in place of the binary inner node `binary`: its children, then the child of
-    // largest surface area among the inner ones opened in place (its two children take its
-    // lane and the next), until there are four or only leaves. Returns the wide node's index.
-    int collapse(const Mesh &mesh, int binary) {
-        const int index = int(nodes.size());
-        nodes.emplace_back();
-        int kids[bvh_width] = {binary + 1, mesh.nodes[size_t(binary)].first};
+    // The children of a wide node in place of the binary inner node `binary`, written to kids
+    // (room for `width`): its two children, then the child of largest surface area among the
+    // inner ones opened in place (its two children take its lane and the next), until there
+    // are `width` or only leaves. Returns how many. collapse() and collapse8() share it.
+    static int wide_children(const Mesh &mesh, int binary, int width, int *kids) {
+        kids[0] = binary + 1, kids[1] = mesh.nodes[size_t(binary)].first;
         int n = 2;
-        while (n < bvh_width) {
+        while (n < width) {
             int open = -1;
             double largest = -1;
             for (int c = 0; c < n; ++c) {
@@ -650,6 +635,16 @@ struct WideBVH : MeshAccelerator {
             kids[open + 1] = mesh.nodes[size_t(opened)].first;
             ++n;
         }
+        return n;
+    }
+
+    // A wide node in place of the binary inner node `binary`, of wide_children()'s four
+    // children. Returns the wide node's index.
+    int collapse(const Mesh &mesh, int binary) {
+        const int index = int(nodes.size());
+        nodes.emplace_back();
+        int kids[bvh_width];
+        const int n = wide_children(mesh, binary, bvh_width, kids);
         for (int c = 0; c < n; ++c) set_child(mesh, index, c, kids[c]);
         return index;
     }
