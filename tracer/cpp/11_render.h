@@ -82,13 +82,15 @@ inline uint32_t sobol_0(uint32_t k) {
 
 // Dimension 1: bit b of k adds (xor) the direction number v_b, of the primitive polynomial
 // x + 1, whose recurrence is v_b = v_(b-1) xor (v_(b-1) >> 1) from v_0 = 1/2 (Joe and Kuo's
-// table, dimension 2): Pascal's triangle mod 2 as the generator matrix.
-inline uint32_t sobol_1(uint32_t k) {
+// table, dimension 2): Pascal's triangle mod 2 as the generator matrix. Computed mirrored
+// (v_0 = 1, each next v_(b-1) xor (v_(b-1) << 1)), as SobolStream scrambles it, and mirrored
+// back by sobol_0() for the pixel.
+inline uint32_t sobol_1_mirrored(uint32_t k) {
     uint32_t x = 0;
-    for (uint32_t v = 1u << 31; k != 0; k >>= 1, v ^= v >> 1)
-        if (k & 1) x ^= v;
+    for (uint32_t v = 1; k != 0; k >>= 1, v ^= v << 1) x ^= v & (0u - (k & 1));
     return x;
 }
+inline uint32_t sobol_1(uint32_t k) { return sobol_0(sobol_1_mirrored(k)); }
 
 // Owen's nested uniform scrambling (Owen, "Randomly permuted (t,m,s)-nets and (t,s)-sequences",
 // 1995) of the top `bits` bits of x: bit d (from the top) is flipped by a coin tossed for the
@@ -140,13 +142,15 @@ inline uint32_t fast_owen_mirrored(uint32_t v, uint32_t seed) {
 // (fast_owen_mirrored(): these are many numbers a sample, the image-plane point two). Six
 // numbers are a path vertex's (20_path.h trace_path(): which light, where on it (a pair),
 // which lobe, which direction (a pair)): the first two vertices, where most of the light is
-// gathered, are stratified; the rest come from the sample's stream, as with the strata. Each number is
-// uniform and independent of the sample's others, as a stream's: the estimate is unbiased. A
-// number is a multiple of 2^-32 (a stream's, of 2^-53): finer than any light or lobe needs.
+// gathered, are stratified; the rest come from the sample's stream, as with the strata. Each
+// number is uniform and independent of the sample's others, as a stream's: the estimate is
+// unbiased. A number is a multiple of 2^-32 (a stream's, of 2^-53): finer than any light or
+// lobe needs.
 struct SobolStream : Rng {
     static constexpr int sobol_draws = 12;
-    // Per dimension, two 32-bit scrambles and a permutation's seed: the same for every sample
-    // of the pixel, drawn once for it (make_keys()).
+    // Per dimension a 64-bit key, the same for every sample of the pixel, drawn once for it
+    // (make_keys()): its low half seeds the index's permutation, its high half the scramble
+    // (a pair's second dimension is scrambled by the next key's low half).
     using Keys = std::array<uint64_t, sobol_draws>;
     const Keys *keys;
     uint32_t k;  // the sample's index in the pixel
@@ -168,12 +172,6 @@ struct SobolStream : Rng {
     // correlated, and the error was 20% higher.)
     uint32_t index(uint32_t seed) const {
         return sobol_0(fast_owen_mirrored(sobol_0(k << (32 - bits)), seed)) >> (32 - bits);
-    }
-    // Sobol's dimension 1 mirrored (sobol_0() of sobol_1(i)): the direction numbers mirrored.
-    static uint32_t sobol_1_mirrored(uint32_t i) {
-        uint32_t x = 0;
-        for (uint32_t v = 1; i != 0; i >>= 1, v ^= v << 1) x ^= v & (0u - (i & 1));
-        return x;
     }
     static double unit(uint32_t mirrored) { return sobol_0(mirrored) * 0x1.0p-32; }
     double uniform() {
