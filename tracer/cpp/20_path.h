@@ -535,39 +535,19 @@ struct WorldBounds {
 // answers, and a box is the cheaper test. A mesh whose wide tree is one node (WideBVH::flat,
 // 21_wide_bvh.h) is searched here directly, with the ray's slab and watertight set-up made once
 // for all of them: the hit Mesh::hit() would give (the same search, the same record()).
-//
-// Meshes of one leaf each that come one after another (the Cornell box's six quads of two
-// triangles) are one run: their triangles side by side in blocks of four, in the order the
-// meshes would be asked, each in its leaf order, behind the union of their bounds. The lecture
-// asks them one by one, a bounds test, a node test and a block of two triangles each (six
-// bounds tests, branches whose outcome a ray's direction decides, mispredicted); a run asks the
-// same triangles, in the same order, with the same range shrinking at each hit, three blocks at
-// a time. Each triangle is accepted by intersect_triangle() as before, with the range it would
-// have had (a block's candidates are picked with the range at the block's start, a range at
-// least as wide, so no triangle the one-by-one search accepts is left out): the same hit, and
-// record() made once, for the closest.
 struct CulledQueries {
     const Scene &scene;
     struct Bounded {
-        const Object *object = nullptr;
+        const Object *object;
         WorldBounds bounds;
         const Mesh *mesh = nullptr;   // a flat mesh (flat_bvh its search), else null
         const WideBVH *flat_bvh = nullptr;
-        int run = -1; // >= 0: not one object but runs[run]
-    };
-    struct Run {
-        std::vector<TriangleBlock> blocks; // the meshes' triangles, leaf positions 0, 1, ...
-        std::vector<const Mesh *> mesh;    // per leaf position: its mesh
-        std::vector<int> triangle;         // and its triangle's index in that mesh
-        std::vector<int> position;         // 0, 1, ...: block_hits_of()'s `order`
     };
     std::vector<Bounded> objects; // in the scene's order (ties between equal t go as there)
     std::vector<Bounded> blockers; // the same, boxes first
-    std::vector<Run> runs;
     bool any_flat = false;
 
     explicit CulledQueries(const Scene &s) : scene(s) {
-        std::vector<Bounded> all;
         for (const auto &o : s.objects) {
             if (const auto *mesh = dynamic_cast<const Mesh *>(o.get())) {
                 Bounded b{o.get(), WorldBounds::around(*mesh)};
@@ -576,91 +556,16 @@ struct CulledQueries {
                                        ? dynamic_cast<const WideBVH *>(mesh->accelerator.get())
                                        : nullptr;
                 if (wide && wide->flat) b.mesh = mesh, b.flat_bvh = wide, any_flat = true;
-                all.push_back(b);
+                objects.push_back(b);
             } else if (const auto *box = dynamic_cast<const Box *>(o.get()))
-                all.push_back({o.get(), WorldBounds::around(*box)});
+                objects.push_back({o.get(), WorldBounds::around(*box)});
             else
-                all.push_back({o.get(), WorldBounds::everywhere()});
+                objects.push_back({o.get(), WorldBounds::everywhere()});
         }
-        objects = with_runs(all);
-        std::vector<Bounded> boxes_first;
-        for (const Bounded &b : all)
-            if (dynamic_cast<const Box *>(b.object)) boxes_first.push_back(b);
-        for (const Bounded &b : all)
-            if (!dynamic_cast<const Box *>(b.object)) boxes_first.push_back(b);
-        blockers = with_runs(boxes_first);
-    }
-
-    // A flat mesh whose one node has one child: a single leaf, searched in leaf order.
-    static bool one_leaf(const Bounded &b) {
-        return b.flat_bvh != nullptr && b.flat_bvh->nodes[0].children == 1;
-    }
-
-    // `list` with each stretch of two or more one-leaf meshes made one run.
-    std::vector<Bounded> with_runs(const std::vector<Bounded> &list) {
-        std::vector<Bounded> out;
-        for (size_t i = 0; i < list.size();) {
-            size_t end = i;
-            while (end < list.size() && one_leaf(list[end])) ++end;
-            if (end - i < 2) {
-                out.push_back(list[i++]);
-                continue;
-            }
-            Run run;
-            Bounded entry; // its bounds: the union of its meshes' (an empty box to start)
-            std::vector<TriangleBlock> lanes; // one triangle each, in lane 0
-            for (size_t m = i; m < end; ++m) {
-                const Mesh &mesh = *list[m].mesh;
-                const WideBVH &wide = *list[m].flat_bvh;
-                entry.bounds.box.extend(list[m].bounds.box); // no margins (around(Mesh))
-                for (int b = -1 - wide.nodes[0].child[0], more = 1; more; ++b) {
-                    const TriangleBlock &block = wide.blocks[size_t(b)];
-                    more = block.more;
-                    for (int l = 0; l < bvh_width && block.leaf[l] >= 0; ++l) {
-                        TriangleBlock one{};
-                        for (int v = 0; v < 3; ++v)
-                            for (int axis = 0; axis < 3; ++axis)
-                                one.p[v][axis][0] = block.p[v][axis][l];
-                        lanes.push_back(one);
-                        run.mesh.push_back(&mesh);
-                        run.triangle.push_back(mesh.order[size_t(block.leaf[l])]);
-                    }
-                }
-            }
-            for (size_t f = 0; f < lanes.size(); f += bvh_width) {
-                TriangleBlock block{}; // padded as make_block() pads: leaf -1, vertices 0
-                for (int l = 0; l < bvh_width; ++l) {
-                    const size_t k = f + size_t(l);
-                    block.leaf[l] = k < lanes.size() ? int32_t(k) : -1;
-                    if (k < lanes.size())
-                        for (int v = 0; v < 3; ++v)
-                            for (int axis = 0; axis < 3; ++axis)
-                                block.p[v][axis][l] = lanes[k].p[v][axis][0];
-                }
-                run.blocks.push_back(block);
-            }
-            for (size_t k = 0; k < lanes.size(); ++k) run.position.push_back(int(k));
-            entry.run = int(runs.size());
-            runs.push_back(std::move(run));
-            out.push_back(entry);
-            i = end;
-        }
-        return out;
-    }
-
-    // A run's triangles in order (the meshes' hits, Mesh::hit() after Mesh::hit()): the closest
-    // within range (range.max shrinks to it), or with `any` the first; `position` its leaf
-    // position in the run.
-    static bool run_hits(const Run &run, const WatertightRay &wr, Interval &range,
-                         TriangleHit &best, int &position, RayCounts &counts, bool any) {
-        bool found = false;
-        for (const TriangleBlock &block : run.blocks)
-            if (block_hits_of(block, run.position, wr, range, best, position,
-                              counts.primitive_tests, any)) {
-                found = true;
-                if (any) return true;
-            }
-        return found;
+        for (const Bounded &b : objects)
+            if (dynamic_cast<const Box *>(b.object)) blockers.push_back(b);
+        for (const Bounded &b : objects)
+            if (!dynamic_cast<const Box *>(b.object)) blockers.push_back(b);
     }
 
     Hit closest(const Ray &ray, RayCounts &counts) const {
@@ -674,37 +579,19 @@ struct CulledQueries {
             // once for every flat mesh.
             WatertightRay wr;
             if (any_flat) wr = WatertightRay(ray);
-            // A mesh's hit so far, recorded once at the end (a later object's closer hit
-            // replaces it): its triangle's hit, the mesh and the triangle.
-            TriangleHit th;
-            const Mesh *hit_mesh = nullptr;
-            int hit_triangle = -1;
             for (const Bounded &b : objects) {
                 if (!b.bounds.may_hit(sr, reach, range, counts)) continue;
-                if (b.run >= 0) {
-                    const Run &run = runs[size_t(b.run)];
-                    int position = -1;
-                    if (run_hits(run, wr, range, th, position, counts, false)) {
-                        hit_mesh = run.mesh[size_t(position)];
-                        hit_triangle = run.triangle[size_t(position)];
-                        nearest = Nearest{};
-                    }
-                    continue;
-                }
                 if (b.flat_bvh) { // Mesh::hit(), its root box tested above
+                    TriangleHit th;
                     int t = -1;
                     if (b.flat_bvh->search_flat(*b.mesh, sr, wr, range, th, t, counts, false)) {
-                        hit_mesh = b.mesh, hit_triangle = t;
-                        range.max = th.t, nearest = Nearest{};
+                        b.mesh->record(th, t, hit);
+                        range.max = hit.t, nearest = Nearest{};
                     }
                     continue;
                 }
-                if (b.object->hit(ray, range, hit, counts)) {
-                    range.max = hit.t, nearest = Nearest{};
-                    hit_mesh = nullptr;
-                }
+                if (b.object->hit(ray, range, hit, counts)) range.max = hit.t, nearest = Nearest{};
             }
-            if (hit_mesh != nullptr) hit_mesh->record(th, hit_triangle, hit);
         }
         nearest.record(ray, range.max, hit);
         return hit;
@@ -722,14 +609,11 @@ struct CulledQueries {
         bool wr_made = false; // when the first flat mesh is asked (a box may answer first)
         for (const Bounded &b : blockers) {
             if (!b.bounds.may_hit(sr, reach, range, counts)) continue;
-            if (b.run >= 0 || b.flat_bvh) {
+            if (b.flat_bvh) { // Mesh::blocks(), its root box tested above
                 if (!wr_made) wr = WatertightRay(ray), wr_made = true;
                 TriangleHit th;
                 int t = -1;
-                Interval within = range; // run_hits() would shrink it at a hit
-                if (b.run >= 0 ? run_hits(runs[size_t(b.run)], wr, within, th, t, counts, true)
-                               : b.flat_bvh->search_flat(*b.mesh, sr, wr, range, th, t, counts,
-                                                         true))
+                if (b.flat_bvh->search_flat(*b.mesh, sr, wr, range, th, t, counts, true))
                     return true;
                 continue;
             }

@@ -302,11 +302,9 @@ inline M4 block_candidates(const FloatBlock &b, const WatertightRay &wr, const I
 // block_hits() for either kind of block: the same candidates, the same re-test, in leaf order.
 // The loop runs over the candidates' bits only: a block's triangles (2 to 4) and its
 // candidates (a tenth of a candidate a ray, over all its blocks) are counted and picked without
-// a branch per lane, which the lanes' mix of outcomes made mispredict. `order`: the triangle
-// index of each leaf position (Mesh::order; a run of meshes, 20_path.h, has its own).
+// a branch per lane, which the lanes' mix of outcomes made mispredict.
 template <class Block>
-inline bool block_hits_of(const Block &block, const std::vector<int> &order,
-                          const WatertightRay &wr,
+inline bool block_hits_of(const Block &block, const Mesh &mesh, const WatertightRay &wr,
                           Interval &range, TriangleHit &best, int &best_triangle,
                           uint64_t &primitive_tests, bool any) {
     const M4 candidates = block_candidates(block, wr, range);
@@ -325,7 +323,7 @@ inline bool block_hits_of(const Block &block, const std::vector<int> &order,
         TriangleHit th;
         if (intersect_triangle(v[0], v[1], v[2], wr, range, th)) {
             best = th;
-            best_triangle = order[size_t(block.leaf[l])];
+            best_triangle = mesh.order[size_t(block.leaf[l])];
             range.max = th.t;
             found = true;
             if (any) return true;
@@ -818,8 +816,8 @@ template <class Block> struct Search8 {
         for (uint32_t b = first_block, more = 1; more; ++b) {
             const Block &block = blocks[b];
             more = uint32_t(block.more);
-            if (block_hits_of(block, mesh.order, wr, range, best, best_triangle,
-                              primitive_tests, any)) {
+            if (block_hits_of(block, mesh, wr, range, best, best_triangle, primitive_tests,
+                              any)) {
                 found = true;
                 if (any) return top = 0, false;
             }
