@@ -208,36 +208,6 @@ inline M4 triangle_candidates(const TriangleBlock &block, const WatertightRay &r
                                   r.Sx, r.Sy, r.Sz, range.min, range.max);
 }
 
-// The triangles of one block tested against one ray, in leaf order, as leaf_hit() tests them:
-// the block's candidates (triangle_candidates()) re-tested by intersect_triangle() itself with
-// the range shrunk by each hit. Counts each real triangle as one primitive test. Returns
-// whether one was hit; with `any`, stops at the first.
-inline bool block_hits(const TriangleBlock &block, const Mesh &mesh, const WatertightRay &wr,
-                       Interval &range, TriangleHit &best, int &best_triangle,
-                       uint64_t &primitive_tests, bool any) {
-    M4 candidates = triangle_candidates(block, wr, range);
-    bool found = false;
-    for (int l = 0; l < bvh_width; ++l) {
-        const int i = block.leaf[l];
-        if (i < 0) break;
-        ++primitive_tests;
-        if (!candidates[l]) continue;
-        // The block's own copy of leaf_vertices[3 i ...] (the same doubles): no second cache
-        // line to wait for.
-        Vec3 v[3];
-        for (int k = 0; k < 3; ++k) v[k] = {block.p[k][0][l], block.p[k][1][l], block.p[k][2][l]};
-        TriangleHit th;
-        if (intersect_triangle(v[0], v[1], v[2], wr, range, th)) {
-            best = th;
-            best_triangle = mesh.order[size_t(i)];
-            range.max = th.t;
-            found = true;
-            if (any) return true;
-        }
-    }
-    return found;
-}
-
 // -- The eight-wide hierarchy (issue 12) -------------------------------------------------------
 // The same collapse with eight children a node (Embree's BVH8; Benthin, Woop, Wald and Afra,
 // "Improved Two-Level BVHs using Partial Re-Braiding", use it on AVX-512 too): an incoherent ray
@@ -299,12 +269,16 @@ inline M4 block_candidates(const FloatBlock &b, const WatertightRay &wr, const I
                                   range.min, range.max);
 }
 
-// block_hits() for either kind of block: the same candidates, the same re-test, in leaf order.
-// The loop runs over the candidates' bits only: a block's triangles (2 to 4) and its
-// candidates (a tenth of a candidate a ray, over all its blocks) are counted and picked without
-// a branch per lane, which the lanes' mix of outcomes made mispredict.
+// The triangles of one block (either kind) tested against one ray, in leaf order, as leaf_hit()
+// tests them: the block's candidates (block_candidates()) re-tested by intersect_triangle()
+// itself with the range shrunk by each hit. Counts each real triangle as one primitive test.
+// Returns whether one was hit; with `any`, stops at the first. The loop runs over the
+// candidates' bits only: a block's triangles (2 to 4) and its candidates (a tenth of a
+// candidate a ray, over all its blocks) are counted and picked without a branch per lane,
+// which the lanes' mix of outcomes made mispredict (a loop over the lanes that asked each
+// lane took a fifth of the Cornell box's time in a flat mesh's search, perf, issue 12).
 template <class Block>
-inline bool block_hits_of(const Block &block, const Mesh &mesh, const WatertightRay &wr,
+inline bool block_hits(const Block &block, const Mesh &mesh, const WatertightRay &wr,
                           Interval &range, TriangleHit &best, int &best_triangle,
                           uint64_t &primitive_tests, bool any) {
     const M4 candidates = block_candidates(block, wr, range);
@@ -816,7 +790,7 @@ template <class Block> struct Search8 {
         for (uint32_t b = first_block, more = 1; more; ++b) {
             const Block &block = blocks[b];
             more = uint32_t(block.more);
-            if (block_hits_of(block, mesh, wr, range, best, best_triangle, primitive_tests,
+            if (block_hits(block, mesh, wr, range, best, best_triangle, primitive_tests,
                               any)) {
                 found = true;
                 if (any) return top = 0, false;
