@@ -69,6 +69,19 @@ def _best(fn: Callable[[], float], repeats: int) -> float:
     return min(fn() for _ in range(repeats))
 
 
+def _best_alternating(runs: dict[str, tuple[Callable[[], float], int]]) -> dict[str, float]:
+    """Each renderer's fastest of its repeats, the renderers taking turns (one run each per
+    round, until each has made its repeats) rather than one after another: a shared machine's
+    speed drifts over seconds (by 20% on these machines), and renderers timed in different
+    seconds would carry that drift into their ratio."""
+    times: dict[str, list[float]] = {name: [] for name in runs}
+    for round_ in range(max(repeats for _, repeats in runs.values())):
+        for name, (fn, repeats) in runs.items():
+            if round_ < repeats:
+                times[name].append(fn())
+    return {name: min(t) for name, t in times.items()}
+
+
 def suite_classic(
     repeats: int = 3, threads: tuple[int, ...] = (1, 2), width: int = 1920, height: int = 1024
 ) -> list[dict[str, Any]]:
@@ -80,21 +93,23 @@ def suite_classic(
     case = f"ex25-{width}x{height}"
     rows = []
     for n in threads:
-        times = {
-            # rtlab's frame is short, so the shared machine's hiccups weigh more: more repeats.
-            "rtlab": _best(
-                lambda n=n: render_with_stats(scene, threads=n, progress=False).seconds,
-                2 * repeats + 1,
-            ),
-            "povray": _best(
-                lambda n=n: run_povray(scene, threads=n, exr_pass=False).trace_seconds,
-                max(1, repeats - 1),
-            ),
-            "mitsuba-llvm": _best(
-                lambda n=n: run_mitsuba(scene, variant="llvm_ad_rgb", threads=n).render_seconds,
-                max(1, repeats - 1),
-            ),
-        }
+        times = _best_alternating(
+            {
+                # rtlab's frame is short, so the shared machine's hiccups weigh more: more repeats.
+                "rtlab": (
+                    lambda n=n: render_with_stats(scene, threads=n, progress=False).seconds,
+                    2 * repeats + 1,
+                ),
+                "povray": (
+                    lambda n=n: run_povray(scene, threads=n, exr_pass=False).trace_seconds,
+                    max(1, repeats - 1),
+                ),
+                "mitsuba-llvm": (
+                    lambda n=n: run_mitsuba(scene, variant="llvm_ad_rgb", threads=n).render_seconds,
+                    max(1, repeats - 1),
+                ),
+            }
+        )
         for renderer, value in times.items():
             rows.append({"case": case, "renderer": renderer, "threads": n, "metric": "seconds",
                          "value": value, "unit": "s", "repeats": repeats})  # fmt: skip
@@ -236,8 +251,13 @@ def suite_geometry(
     )  # fmt: skip
     for case, n_rays, ours_fn, theirs_fn in cases:
         for n in threads:
-            ours = _best(lambda n=n, f=ours_fn: f(n), 2 * repeats + 1)
-            theirs = _best(lambda n=n, f=theirs_fn: f(n), 2 * repeats + 1)
+            best = _best_alternating(
+                {
+                    "rtlab": (lambda n=n, f=ours_fn: f(n), 2 * repeats + 1),
+                    "embree": (lambda n=n, f=theirs_fn: f(n), 2 * repeats + 1),
+                }
+            )
+            ours, theirs = best["rtlab"], best["embree"]
             for renderer, seconds in (("rtlab", ours), ("embree", theirs)):
                 rows.append({"case": case, "renderer": renderer, "threads": n,
                              "metric": "mrays_per_s", "value": n_rays / seconds / 1e6,
