@@ -74,3 +74,68 @@ def test_scenes_with_other_objects_trace_one_ray_at_a_time():
     packets, plain = both(scene)
     assert packets.integrator == plain.integrator == "aov"
     assert np.array_equal(packets.image, plain.image)
+
+
+def _left_eye(camera) -> tuple[np.ndarray, float]:
+    """The eye and window shift of 03_camera.h stereo_eye(..., side=-1), or the camera's own."""
+    eye = np.asarray(camera.eye, dtype=np.float64)
+    if camera.stereo is None:
+        return eye, 0.0
+    forward = np.asarray(camera.look_at) - eye
+    right = np.cross(forward / np.linalg.norm(forward), camera.up)
+    half = -camera.stereo.eye_separation / 2
+    return eye + half * right / np.linalg.norm(right), -half / camera.stereo.convergence
+
+
+def _pixel_direction(camera, i: float, j: float) -> np.ndarray:
+    """03_camera.h primary_ray()'s direction through image point (i, j) in pixel units (the
+    left eye's, for a stereo pair)."""
+    eye = np.asarray(camera.eye, dtype=np.float64)
+    forward = np.asarray(camera.look_at) - eye
+    forward /= np.linalg.norm(forward)
+    right = np.cross(forward, camera.up)
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    h = 2 * np.tan(np.radians(camera.fov_y) / 2)
+    w = h * camera.width / camera.height
+    shift = _left_eye(camera)[1]
+    d = (
+        forward
+        + ((i / camera.width - 0.5) * w + shift) * right
+        + (0.5 - j / camera.height) * h * up
+    )
+    return d / np.linalg.norm(d)
+
+
+# A packet whose pixels lie outside the image rectangle of every mesh's root box is not traced
+# (22_mesh_packets.h pixel_rect()): its rays would miss the box. A triangle a fifth of a pixel
+# across, whose box is seen by the one pixel centre it covers, at the image's corners, at a
+# packet's first and last pixel, and on both sides of a tile's edge: the packets must find it
+# where the one-ray code does. A rectangle off by more than its two pixels of margin loses it:
+# with the rows' axis flipped 14 of these cases failed, with the stereo window's shift left out
+# 7 (both tried by editing pixel_rect()).
+@pytest.mark.parametrize("pixel", [(0, 0), (36, 20), (4, 2), (3, 1), (15, 15), (16, 16), (7, 3)])
+@pytest.mark.parametrize("stereo", [False, True])
+def test_a_mesh_seen_by_one_pixel(pixel, stereo):
+    scene = meshes_only("bunny.toml", width=37, height=21)
+    if stereo:  # side by side; the triangle is placed for the left eye
+        from tracer.scene.model import Stereo
+
+        stereo_pair = Stereo(eye_separation=1.0, convergence=2.0)
+        camera = dataclasses.replace(scene.camera, stereo=stereo_pair)
+        scene = dataclasses.replace(scene, camera=camera)
+    i, j = pixel
+    cam = scene.camera
+    # A fifth of a pixel across at distance 10, around the pixel centre's ray.
+    corners = [(i + 0.4, j + 0.6), (i + 0.6, j + 0.6), (i + 0.5, j + 0.4)]
+    vertices = _left_eye(cam)[0] + 10 * np.array([_pixel_direction(cam, *c) for c in corners])
+    tiny = dataclasses.replace(scene.objects[0], vertices=vertices,
+                               faces=np.array([[0, 1, 2]], dtype=np.int32), smooth=False,
+                               normals=None)  # fmt: skip
+    scene = dataclasses.replace(scene, objects=(tiny,))
+    packets, plain = both(scene)
+    assert (packets.integrator, plain.integrator) == ("aov_packets", "aov")
+    assert np.array_equal(packets.image, plain.image)
+    hits = np.argwhere(np.isfinite(plain.image[..., 0])).tolist()
+    assert [j, i] in hits  # the left eye's (or the only) image, columns 0 to 36
+    assert len(hits) <= 1 + stereo  # the right eye sees it once at most
