@@ -7,6 +7,8 @@ import copy
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 ROOT = Path(__file__).resolve().parents[1]  # the repository
 SCENES = ROOT / "reference" / "scenes"  # the canonical scenes
 
@@ -70,3 +72,35 @@ def classic_scenes() -> list[Path]:
         for p in sorted(SCENES.glob("*.toml"))
         if tracer.load_scene(p).render.integrator == "classic"
     ]
+
+
+def left_eye(camera: Any) -> tuple[np.ndarray, float]:
+    """The eye and image-window shift of tracer/cpp/03_camera.h stereo_eye(..., side=-1) for a
+    camera (tracer.scene.model.Camera) with a stereo pair, or the camera's own eye and 0."""
+    eye = np.asarray(camera.eye, dtype=np.float64)
+    if camera.stereo is None:
+        return eye, 0.0
+    forward = np.asarray(camera.look_at) - eye
+    right = np.cross(forward / np.linalg.norm(forward), camera.up)
+    half = -camera.stereo.eye_separation / 2
+    return eye + half * right / np.linalg.norm(right), -half / camera.stereo.convergence
+
+
+def pixel_direction(camera: Any, i: float, j: float) -> np.ndarray:
+    """03_camera.h primary_ray()'s unit direction through image point (i, j), in pixel units
+    ((k + 0.5, l + 0.5) is the centre of pixel (k, l)); the left eye's for a stereo pair."""
+    eye = np.asarray(camera.eye, dtype=np.float64)
+    forward = np.asarray(camera.look_at) - eye
+    forward /= np.linalg.norm(forward)
+    right = np.cross(forward, camera.up)
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    h = 2 * np.tan(np.radians(camera.fov_y) / 2)
+    w = h * camera.width / camera.height
+    shift = left_eye(camera)[1]
+    d = (
+        forward
+        + ((i / camera.width - 0.5) * w + shift) * right
+        + (0.5 - j / camera.height) * h * up
+    )
+    return d / np.linalg.norm(d)

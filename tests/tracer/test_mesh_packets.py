@@ -15,7 +15,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from tests.helpers import SCENES
+from tests.helpers import SCENES, left_eye, pixel_direction
 from tracer.render import render_with_stats
 from tracer.scene import Mesh, load_scene
 
@@ -76,39 +76,8 @@ def test_scenes_with_other_objects_trace_one_ray_at_a_time():
     assert np.array_equal(packets.image, plain.image)
 
 
-def _left_eye(camera) -> tuple[np.ndarray, float]:
-    """The eye and window shift of 03_camera.h stereo_eye(..., side=-1), or the camera's own."""
-    eye = np.asarray(camera.eye, dtype=np.float64)
-    if camera.stereo is None:
-        return eye, 0.0
-    forward = np.asarray(camera.look_at) - eye
-    right = np.cross(forward / np.linalg.norm(forward), camera.up)
-    half = -camera.stereo.eye_separation / 2
-    return eye + half * right / np.linalg.norm(right), -half / camera.stereo.convergence
-
-
-def _pixel_direction(camera, i: float, j: float) -> np.ndarray:
-    """03_camera.h primary_ray()'s direction through image point (i, j) in pixel units (the
-    left eye's, for a stereo pair)."""
-    eye = np.asarray(camera.eye, dtype=np.float64)
-    forward = np.asarray(camera.look_at) - eye
-    forward /= np.linalg.norm(forward)
-    right = np.cross(forward, camera.up)
-    right /= np.linalg.norm(right)
-    up = np.cross(right, forward)
-    h = 2 * np.tan(np.radians(camera.fov_y) / 2)
-    w = h * camera.width / camera.height
-    shift = _left_eye(camera)[1]
-    d = (
-        forward
-        + ((i / camera.width - 0.5) * w + shift) * right
-        + (0.5 - j / camera.height) * h * up
-    )
-    return d / np.linalg.norm(d)
-
-
 # A packet whose pixels lie outside the image rectangle of every mesh's root box is not traced
-# (22_mesh_packets.h pixel_rect()): its rays would miss the box. A triangle a fifth of a pixel
+# (12_packet.h pixel_rect()): its rays would miss the box. A triangle a fifth of a pixel
 # across, whose box is seen by the one pixel centre it covers, at the image's corners, at a
 # packet's first and last pixel, and on both sides of a tile's edge: the packets must find it
 # where the one-ray code does. A rectangle off by more than its two pixels of margin loses it:
@@ -128,7 +97,7 @@ def test_a_mesh_seen_by_one_pixel(pixel, stereo):
     cam = scene.camera
     # A fifth of a pixel across at distance 10, around the pixel centre's ray.
     corners = [(i + 0.4, j + 0.6), (i + 0.6, j + 0.6), (i + 0.5, j + 0.4)]
-    vertices = _left_eye(cam)[0] + 10 * np.array([_pixel_direction(cam, *c) for c in corners])
+    vertices = left_eye(cam)[0] + 10 * np.array([pixel_direction(cam, *c) for c in corners])
     tiny = dataclasses.replace(scene.objects[0], vertices=vertices,
                                faces=np.array([[0, 1, 2]], dtype=np.int32), smooth=False,
                                normals=None)  # fmt: skip

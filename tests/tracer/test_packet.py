@@ -14,7 +14,14 @@ import numpy as np
 import pytest
 
 import tracer
-from tests.helpers import classic_scenes, material, scene_dict, sphere
+from tests.helpers import (
+    classic_scenes,
+    left_eye,
+    material,
+    pixel_direction,
+    scene_dict,
+    sphere,
+)
 
 CLASSIC = classic_scenes()
 
@@ -108,3 +115,32 @@ def test_other_integrators_report_themselves(integrator):
     for packets, expected in ((False, integrator), (True, fast)):
         result = tracer.render_with_stats(tracer.load_scene(data), threads=1, packets=packets)
         assert result.integrator == expected
+
+
+# A packet of primary rays skips the spheres whose bounding box's image rectangle holds none of
+# its pixels (12_packet.h pixel_rect(), two pixels of margin): those rays would miss them. A
+# sphere a fifth of a pixel across, seen by the one pixel centre it covers, at the image's
+# corners, on both sides of a packet's edge (8 pixels of a row) and of a tile's (16): the
+# packets must show it where the one-ray code does, also for a stereo pair's left eye.
+@pytest.mark.parametrize("pixel", [(0, 0), (36, 20), (7, 3), (8, 3), (15, 15), (16, 16)])
+@pytest.mark.parametrize("stereo", [False, True])
+def test_a_sphere_seen_by_one_pixel(pixel, stereo):
+    camera = {"width": 37, "height": 21}
+    if stereo:
+        camera["stereo"] = {"eye_separation": 1.0, "convergence": 2.0, "layout": "side_by_side"}
+    base = tracer.load_scene(scene_dict(camera=camera, materials={"m": material(ambient=1.0)}))
+    i, j = pixel
+    cam = base.camera
+    centre = left_eye(cam)[0] + 10 * pixel_direction(cam, i + 0.5, j + 0.5)
+    radius = 10 * np.linalg.norm(
+        pixel_direction(cam, i + 0.6, j + 0.5) - pixel_direction(cam, i + 0.5, j + 0.5)
+    )
+    data = scene_dict(camera=camera, materials={"m": material(ambient=1.0)},
+                      objects=[sphere(list(centre), float(radius))])  # fmt: skip
+    a, b = both(tracer.load_scene(data))
+    assert (a.integrator, b.integrator) == ("classic", "classic_packets")
+    assert np.array_equal(a.image, b.image)
+    assert a.rays == b.rays
+    lit = np.argwhere(a.image.sum(axis=-1) > 0).tolist()
+    assert [j, i] in lit  # the left eye's (or the only) image, columns 0 to 36
+    assert len(lit) <= 1 + stereo  # the right eye sees it once at most

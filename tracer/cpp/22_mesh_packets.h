@@ -278,47 +278,6 @@ inline Vec3L block_up(const Camera &cam, int j0) {
     return splat(cam.true_up) * (y * cam.plane_height);
 }
 
-// The pixels whose primary rays may meet a box: a rectangle of the image, in pixel units (pixel
-// (i, j) has its centre at (i + 0.5, j + 0.5)), or every pixel. A box wholly in front of the
-// eye (every corner at positive depth along `forward`; then the eye is outside it) is seen
-// through the convex hull of its corners' images on the image plane, so a ray through a pixel
-// centre outside the rectangle around them misses the box. The rectangle is widened by two
-// pixels, some twelve orders of magnitude more than the roundings of this projection and the
-// slab test's widening of the box (2 gamma(3) of the distance, 14_box.h) move it, so the slab
-// test accepts no ray through a pixel outside it: skipping those rays' test changes nothing.
-// 81% of the bunny's 1920 x 1024 primary rays miss its box; their packets' set-up (a
-// normalisation and three divisions) was a tenth of the render (perf, issue 12).
-struct PixelRect {
-    double i_min = -infinity, i_max = infinity, j_min = -infinity, j_max = infinity;
-
-    // Whether a ray through some pixel centre of columns [i0, i1) and rows [j0, j1) may meet it.
-    bool may_meet(int i0, int i1, int j0, int j1) const {
-        return i1 - 0.5 >= i_min && i0 + 0.5 <= i_max && j1 - 0.5 >= j_min && j0 + 0.5 <= j_max;
-    }
-};
-
-[[gnu::noinline]] inline PixelRect pixel_rect(const Camera &cam, const AABB &box) {
-    PixelRect rect{infinity, -infinity, infinity, -infinity};
-    for (int corner = 0; corner < 8; ++corner) {
-        const Vec3 c{corner & 1 ? box.max.x : box.min.x, corner & 2 ? box.max.y : box.min.y,
-                     corner & 4 ? box.max.z : box.min.z};
-        const Vec3 v = c - cam.eye;
-        const double depth = dot(v, cam.forward);
-        if (!(depth > 0)) return PixelRect{}; // at or behind the eye (or not finite): all
-        // 03_camera.h primary_ray()'s d = forward + a right + b true_up, solved for the corner.
-        const double a = dot(v, cam.right) / depth, b = dot(v, cam.true_up) / depth;
-        const double i = ((a - cam.window_shift) / cam.plane_width + 0.5) * cam.width;
-        const double j = (0.5 - b / cam.plane_height) * cam.height;
-        rect.i_min = std::min(rect.i_min, i), rect.i_max = std::max(rect.i_max, i);
-        rect.j_min = std::min(rect.j_min, j), rect.j_max = std::max(rect.j_max, j);
-    }
-    constexpr double margin = 2; // pixels (see above)
-    rect.i_min -= margin, rect.i_max += margin, rect.j_min -= margin, rect.j_max += margin;
-    if (!(rect.i_max - rect.i_min < infinity && rect.j_max - rect.j_min < infinity))
-        return PixelRect{}; // not finite: all
-    return rect;
-}
-
 // A packet's pixels where its rays meet nothing. Not inlined: inlined, it made the tile's loop
 // too large for GCC to inline the search (mesh_closest_hits(), slab_test()) into it, which
 // cost more than the rays it spares.
