@@ -116,9 +116,9 @@ def suite_classic(
     return rows
 
 
-def _camera_rays(scene: Any) -> tuple[np.ndarray, np.ndarray]:
-    """The primary rays through the pixel centres (03_camera.h's formula), as float32 arrays."""
-    cam = scene.camera
+def camera_frame(cam: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, float]:
+    """03_camera.h Camera::initialize() for a scene's camera: the eye, the unit vectors forward,
+    right and true_up, and the image plane's width and height at distance 1."""
     eye = np.asarray(cam.eye, dtype=np.float64)
     forward = np.asarray(cam.look_at) - eye
     forward /= np.linalg.norm(forward)
@@ -126,7 +126,13 @@ def _camera_rays(scene: Any) -> tuple[np.ndarray, np.ndarray]:
     right /= np.linalg.norm(right)
     up = np.cross(right, forward)
     h = 2 * np.tan(np.radians(cam.fov_y) / 2)
-    w = h * cam.width / cam.height
+    return eye, forward, right, up, h * cam.width / cam.height, h
+
+
+def _camera_rays(scene: Any) -> tuple[np.ndarray, np.ndarray]:
+    """The primary rays through the pixel centres (03_camera.h's formula), as float32 arrays."""
+    cam = scene.camera
+    eye, forward, right, up, w, h = camera_frame(cam)
     x = (np.arange(cam.width) + 0.5) / cam.width - 0.5
     y = 0.5 - (np.arange(cam.height) + 0.5) / cam.height
     xx, yy = np.meshgrid(x * w, y * h)

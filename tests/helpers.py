@@ -77,26 +77,21 @@ def classic_scenes() -> list[Path]:
 def left_eye(camera: Any) -> tuple[np.ndarray, float]:
     """The eye and image-window shift of tracer/cpp/03_camera.h stereo_eye(..., side=-1) for a
     camera (tracer.scene.model.Camera) with a stereo pair, or the camera's own eye and 0."""
-    eye = np.asarray(camera.eye, dtype=np.float64)
+    from reference.bench import camera_frame
+
+    eye, _, right, _, _, _ = camera_frame(camera)
     if camera.stereo is None:
         return eye, 0.0
-    forward = np.asarray(camera.look_at) - eye
-    right = np.cross(forward / np.linalg.norm(forward), camera.up)
     half = -camera.stereo.eye_separation / 2
-    return eye + half * right / np.linalg.norm(right), -half / camera.stereo.convergence
+    return eye + half * right, -half / camera.stereo.convergence
 
 
 def pixel_direction(camera: Any, i: float, j: float) -> np.ndarray:
     """03_camera.h primary_ray()'s unit direction through image point (i, j), in pixel units
     ((k + 0.5, l + 0.5) is the centre of pixel (k, l)); the left eye's for a stereo pair."""
-    eye = np.asarray(camera.eye, dtype=np.float64)
-    forward = np.asarray(camera.look_at) - eye
-    forward /= np.linalg.norm(forward)
-    right = np.cross(forward, camera.up)
-    right /= np.linalg.norm(right)
-    up = np.cross(right, forward)
-    h = 2 * np.tan(np.radians(camera.fov_y) / 2)
-    w = h * camera.width / camera.height
+    from reference.bench import camera_frame
+
+    _, forward, right, up, w, h = camera_frame(camera)
     shift = left_eye(camera)[1]
     d = (
         forward
