@@ -1,7 +1,9 @@
-"""The eight-wide tree of 21_wide_bvh.h (Search8) in both of its leaf forms: FloatBlock, for a
-mesh whose vertices are all floats (the bunny, read from a PLY file of floats), and
-TriangleBlock, for any other mesh. Either finds what the lecture's one-ray traversal finds
-(packets=False), but at ties (tests/tracer/test_wide_bvh.py says why a tie may differ)."""
+"""The eight-wide tree of 21_wide_bvh.h (Search8), its nodes quantised (QNode8), in both of
+its leaf forms: IndexBlock, for a mesh whose vertices are all floats (the bunny, read from a
+PLY file of floats), and TriangleBlock, for any other mesh; and the four-wide tree a mesh falls
+back to when a box reaches beyond float's range. Each finds what the lecture's one-ray
+traversal finds (packets=False), but at ties (tests/tracer/test_wide_bvh.py says why a tie may
+differ)."""
 
 from __future__ import annotations
 
@@ -62,3 +64,88 @@ def test_rays_from_outside_and_inside_the_bunny_agree():
         assert len(differ) <= n // 1000
         if len(differ):
             _assert_ties(core, origins[differ], directions[differ])
+
+
+def _agree(core, origins, directions, most_hit: bool = False, any_ties: bool = False):
+    """The fast search and the lecture's agree on every ray but ties: at most one in 1000, or
+    (any_ties) as many as there are, for rays aimed at shared vertices and coincident grids,
+    where nearly every hit is a tie. A box that lost a triangle would show as a different t."""
+    origins, directions = np.ascontiguousarray(origins), np.ascontiguousarray(directions)
+    fast = _core.closest_mesh_hits(core, origins, directions, 1, True)
+    plain = _core.closest_mesh_hits(core, origins, directions, 1, False)
+    hit = np.mean(np.isfinite(plain[0]))
+    assert hit > (0.9 if most_hit else 0.01)
+    differ = np.flatnonzero((fast[0] != plain[0]) | (fast[2] != plain[2]))
+    assert any_ties or len(differ) <= len(origins) // 1000
+    if len(differ):
+        _assert_ties(core, origins[differ], directions[differ])
+
+
+def _grid(offset, size: float, n: int = 48, floats: bool = True, lift: float = 0.0):
+    """Two n x n grids of quads (4 n^2 triangles: the eight-wide tree has many nodes), of side
+    `size`, at `offset`: one in the plane z = offset z (nodes flat on z), one `lift` above it
+    (0: the same plane). Its vertices as floats, or nudged off every float."""
+    u = np.linspace(0.0, size, n + 1)
+    xx, yy = np.meshgrid(u, u)
+    flat = np.stack([xx.ravel(), yy.ravel(), np.zeros(xx.size)], axis=1)
+    vertices = np.concatenate([flat, flat + np.array([0.0, 0.0, lift])]) + np.asarray(offset)
+    vertices = vertices.astype(np.float32).astype(np.float64)
+    if not floats:
+        vertices = vertices * (1 + 2**-40)
+    k = (np.arange(n)[:, None] * (n + 1) + np.arange(n)[None, :]).ravel()
+    quads = np.concatenate([np.stack([k, k + 1, k + n + 2, k + n + 1], 1), (n + 1) ** 2 +
+                            np.stack([k, k + 1, k + n + 2, k + n + 1], 1)])  # fmt: skip
+    faces = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]]).astype(np.int32)
+    return vertices, faces
+
+
+def _core_of(vertices, faces):
+    scene = load_scene(SCENES / "bunny.toml")
+    mesh = next(o for o in scene.objects if isinstance(o, Mesh))
+    mesh = dataclasses.replace(mesh, vertices=vertices, faces=faces)
+    return to_core(dataclasses.replace(scene, objects=(mesh,)))
+
+
+@pytest.mark.parametrize("floats", [True, False])
+@pytest.mark.parametrize(
+    "offset, size, lift",
+    # (the grids' floats: at x = 1e5 a float's step is 2^-7, so a side of 20 keeps 48 distinct
+    # steps; a lift of 1e-7 at z = 0.5 is two steps of 2^-24 apart, 16 at z = 1e8 two of 8)
+    [((0.0, 0.0, 0.0), 1.0, 0.0), ((1e5, -3e4, 0.5), 20.0, 1e-7), ((-2.5, 4.0, 1e8), 3e3, 16.0)],
+)
+def test_quantised_boxes_hold_every_triangle(offset, size, lift, floats):
+    """Rays at points a millionth of a triangle from one of its corners (inside it, so that one
+    triangle is hit, not a tie of six: a corner lies on its leaf's box, and a quantised plane
+    rounded inward by as little as a 255th of its node would lose the point), and at centroids,
+    on grids far from the origin, small, and flat on one axis (a node's extent 0, or a
+    ten-millionth of its side). With lift 0 the two grids coincide: every hit is a tie of two
+    triangles, at the same t."""
+    vertices, faces = _grid(offset, size, floats=floats, lift=lift)
+    floats_in = np.array_equal(vertices.astype(np.float32).astype(np.float64), vertices)
+    assert floats_in == floats
+    core = _core_of(vertices, faces)
+    rng = np.random.default_rng(5)
+    corners = vertices[faces[rng.integers(0, len(faces), 8000)]]  # (n, 3 corners, 3)
+    e = 1e-6
+    b = np.where(np.arange(3) == rng.integers(0, 3, 8000)[:, None], 1 - 2 * e, e)
+    b[4000:] = 1 / 3
+    targets = np.sum(b[..., None] * corners, axis=1)
+    # From above, slanted, so that each ray crosses several boxes before its target.
+    d = rng.normal(size=targets.shape) * [0.3, 0.3, 0.0] + [0.0, 0.0, -1.0]
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    origins = targets - d * (size + lift + 1.0)
+    _agree(core, origins, d, most_hit=True, any_ties=lift == 0)
+
+
+def test_a_box_beyond_floats_range_falls_back_to_the_four_wide_tree():
+    """The bunny with one more triangle reaching to x = 1e300, beyond float's range: the root's
+    box cannot be quantised (its float plane is infinite), so the mesh is searched in the
+    four-wide tree, whose float planes may be infinite; it still finds what the lecture finds."""
+    mesh, _ = _bunny_core(1.0)
+    vertices = np.concatenate([np.asarray(mesh.vertices), [[1e300, 0.0, 0.0]]])
+    with np.errstate(over="ignore"):
+        assert np.isinf(np.float32(vertices[-1, 0]))
+    faces = np.concatenate([np.asarray(mesh.faces), [[0, 1, len(vertices) - 1]]]).astype(np.int32)
+    core = _core_of(vertices, faces)
+    origins, directions = diffuse_rays(mesh.vertices, mesh.faces, 20_000, seed=3)
+    _agree(core, origins, directions)

@@ -19,10 +19,12 @@
 //   one-ray code's.
 //
 // - A mesh that is not flat (more than one wide node) is searched in an eight-wide tree
-//   collapsed the same way instead (Node8, Search8 below: one AVX-512 register of 8 doubles per
-//   slab plane, children ordered by a bitonic sort of integer keys), its leaves in float where
-//   every vertex is a float (FloatBlock, converted back exactly): the same boxes in a shallower
-//   tree and the same triangle tests, so the same answers, in fewer, cheaper steps (issue 12).
+//   collapsed the same way instead (Search8 below: one AVX-512 register of 8 doubles per slab
+//   plane, children ordered by a bitonic sort of integer keys), its boxes stored in 8 bits a
+//   plane against a node's own frame (QNode8) and, where every vertex is a float, its leaves
+//   as the indices of their corners (IndexBlock): boxes that contain the lecture's boxes, in a
+//   shallower tree, and the same triangle tests, so the same answers, in fewer, cheaper steps
+//   from less memory (issue 12).
 //
 // What may differ from Mesh::traverse() is only the order in which leaves are visited (nearest
 // child box first, among four instead of two). Where two triangles are hit at the same t (an
@@ -41,6 +43,7 @@
 #include <memory>
 #include <optional>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 #include <cstdlib>
@@ -228,76 +231,186 @@ typedef uint32_t U8 __attribute__((vector_size(bvh8_width * sizeof(uint32_t))));
 constexpr uint32_t leaf_code = 0x80000000u;
 
 // Eight children's boxes as WideNode's four (float, rounded outward, empty boxes in unused
-// lanes): 192 bytes of planes and 32 of codes, four cache lines.
+// lanes): 192 bytes of planes and 32 of codes, four cache lines. The form the build collapses
+// into; the search reads each node quantised (QNode8, below), in half the memory.
 struct alignas(64) Node8 {
     F8 planes[2][3];
     uint32_t child[bvh8_width];
 };
 
-// Four triangles of a leaf as TriangleBlock holds them, in float: for a mesh whose vertices are
-// all floats (a scanned mesh read from a PLY file of floats, like the bunny), each converts back
-// to the very same double, so a block tested in double is TriangleBlock's test bit for bit, in
-// 192 bytes (three cache lines) instead of 320. A mesh with any other vertex keeps
-// TriangleBlock.
-struct alignas(64) FloatBlock {
-    F4 p[3][3];
-    int32_t leaf[bvh_width];
-    int32_t more;
-};
-static_assert(sizeof(FloatBlock) == 3 * 64, "a float triangle block is three cache lines");
-
-// A float block's vertex as sheared_candidates() reads it, axis by axis: each lane converted to
-// double (exactly) when it is read, so only the axes it asks for are converted, straight from
-// the block (not first all nine into a local array, which the compiler kept in memory).
-struct FloatVertexLanes {
-    const F4 *axes;
-    D4 operator[](int axis) const {
-#if defined(__AVX__)
-        return bit_cast<D4>(_mm256_cvtps_pd(bit_cast<__m128>(axes[axis])));
+// Eight floats to eight doubles (exactly), one AVX-512 instruction where there is one (the
+// vector extension's conversion became two halves and a merge); four to four, one AVX one.
+inline D8 to_double(const F8 &f) {
+#if defined(__AVX512F__)
+    return bit_cast<D8>(_mm512_maskz_cvtps_pd(0xff, bit_cast<__m256>(f)));
 #else
-        return __builtin_convertvector(axes[axis], D4);
+    return __builtin_convertvector(f, D8);
 #endif
+}
+inline D4 to_double(const F4 &f) {
+#if defined(__AVX__)
+    return bit_cast<D4>(_mm256_cvtps_pd(bit_cast<__m128>(f)));
+#else
+    return __builtin_convertvector(f, D4);
+#endif
+}
+
+// Node8 in 8 bits a plane (Mahovsky and Wyvill, "Memory-Conserving Bounding Volume
+// Hierarchies with Coherent Raytracing", 2006; Ylitie, Karras and Laine, "Efficient Incoherent
+// Ray Traversal on GPUs Through Compressed Wide BVHs", 2017): per axis an origin and a power of
+// two, and each child's plane as the whole number q of steps from the origin, read back as
+// fma(q, scale, origin) in float (one rounding, the same in the build and in the search, on
+// every machine: fma is correctly rounded). The build picks each lower q so that the plane read
+// back is at or below the float box's, each upper q at or above it (quantize()): a child's box
+// read back contains its float box, which contains the binary hierarchy's double box, so the
+// search still misses no box the lecture's search meets; it meets a few more (on the bunny's
+// incoherent rays, 2% more nodes and primitive tests).
+// Why: an incoherent ray's nodes and leaves are cache misses, and the bunny's eight-wide tree
+// (2.5 MB of Node8, 6.2 MB of FloatBlock leaves) did not fit the part of this machine's 32 MB
+// shared L3 that its neighbours leave: a chain of loads through 4 MB took 26-52 ns a step,
+// through 8 MB 134 ns, through 16 MB 150 ns (issue 12). 128 bytes a node instead of 256, and
+// one line a leaf (IndexBlock) instead of three, took the bunny's tree from 8.7 MB to 4.0 MB
+// and its incoherent rays 1.3x-1.8x faster.
+// `valid`: the lanes with a child (bit c: lane c); the others are masked out of the slab test.
+struct alignas(64) QNode8 {
+    float origin[3], scale[3];
+    uint32_t valid;
+    uint8_t q[2][3][bvh8_width]; // [lower, upper][axis][child]
+    uint32_t child[bvh8_width];  // as Node8::child
+};
+static_assert(sizeof(QNode8) == 2 * 64, "a quantised node is two cache lines");
+
+// A plane read back from its q (0 to 255), one rounding.
+inline float dequantize(int q, float scale, float origin) {
+    return std::fma(float(q), scale, origin);
+}
+
+// The quantised form of a node whose valid planes are all finite (false, and `out` unusable,
+// for a node with an infinite plane, a vertex beyond float's range).
+inline bool quantize(const Node8 &node, QNode8 &out) {
+    out = QNode8{};
+    for (int c = 0; c < bvh8_width; ++c) {
+        out.child[c] = node.child[c];
+        if (node.planes[0][0][c] <= node.planes[1][0][c]) out.valid |= 1u << c;
     }
+    for (int axis = 0; axis < 3; ++axis) {
+        float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+        for (int c = 0; c < bvh8_width; ++c)
+            if (out.valid >> c & 1)
+                lo = std::min(lo, node.planes[0][axis][c]), hi = std::max(hi, node.planes[1][axis][c]);
+        if (!std::isfinite(lo) || !std::isfinite(hi)) return false;
+        // The origin is the lowest plane (read back exactly: fma(0, scale, lo) = lo); the scale
+        // the smallest power of two that might reach the highest plane in 255 steps, doubled
+        // until every child's upper plane is reached (rounding can cost a step). Finite: the
+        // extent is below 2^129, so a scale of 2^121 reaches it.
+        const double extent = double(hi) - double(lo);
+        float scale = std::numeric_limits<float>::min();
+        if (extent > 0)
+            scale = std::max(scale, std::ldexp(1.0f, int(std::ceil(std::log2(extent / 255)))));
+        for (bool fits = false; !fits; scale *= 2) {
+            fits = true;
+            for (int c = 0; c < bvh8_width && fits; ++c) {
+                if (!(out.valid >> c & 1)) { // inside out besides, should the mask be lost
+                    out.q[0][axis][c] = 255, out.q[1][axis][c] = 0;
+                    continue;
+                }
+                const float child_lo = node.planes[0][axis][c], child_hi = node.planes[1][axis][c];
+                int q_lo = int(std::clamp(std::floor((double(child_lo) - lo) / scale), 0.0, 255.0));
+                while (q_lo > 0 && dequantize(q_lo, scale, lo) > child_lo) --q_lo;
+                int q_hi = int(std::clamp(std::ceil((double(child_hi) - lo) / scale), 0.0, 255.0));
+                while (q_hi <= 255 && dequantize(q_hi, scale, lo) < child_hi) ++q_hi;
+                fits = q_hi <= 255;
+                out.q[0][axis][c] = uint8_t(q_lo), out.q[1][axis][c] = uint8_t(std::min(q_hi, 255));
+            }
+            if (fits) out.origin[axis] = lo, out.scale[axis] = scale;
+        }
+    }
+    return true;
+}
+
+// Eight children's plane `side` (0: lower, 1: upper) on `axis`, read back and converted to
+// double (exactly).
+inline D8 node_plane(const QNode8 &node, int side, int axis) {
+#if defined(__AVX2__) && defined(__FMA__)
+    const __m128i q8 = _mm_loadl_epi64(reinterpret_cast<const __m128i *>(node.q[side][axis]));
+    const __m256 q = _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(q8));
+    const F8 f = bit_cast<F8>(_mm256_fmadd_ps(q, _mm256_set1_ps(node.scale[axis]),
+                                              _mm256_set1_ps(node.origin[axis])));
+#else
+    F8 f;
+    for (int c = 0; c < bvh8_width; ++c)
+        f[c] = dequantize(node.q[side][axis][c], node.scale[axis], node.origin[axis]);
+#endif
+    return to_double(f);
+}
+
+// The lanes of a node's valid bits as a mask.
+inline M8 valid_lanes(const QNode8 &node) {
+#if defined(__AVX512DQ__)
+    return bit_cast<M8>(_mm512_movm_epi64(__mmask8(node.valid)));
+#else
+    M8 m;
+    for (int c = 0; c < bvh8_width; ++c) m[c] = node.valid >> c & 1 ? -1 : 0;
+    return m;
+#endif
+}
+
+// Four triangles of a leaf, for a mesh whose vertices are all floats (a scanned mesh read from
+// a PLY file of floats, like the bunny): each corner as its vertex's index in a copy of the
+// vertices in float, four floats a vertex (x, y, z, 0), times 4. Each converts back to the very
+// same double, so the block tested in double is TriangleBlock's test bit for bit, from one
+// cache line instead of five; a leaf's vertices are shared with its neighbours', and the copy
+// (16 bytes a vertex: 0.8 MB for the bunny) stays in the cache better than the leaves would.
+// Lane l is the triangle `first` + l in leaf order (TriangleBlock's leaf[l]); `lanes_more`:
+// the number of triangles (1 to 4) in bits 0-2, the leaf's next block follows if bit 3 is set.
+// An empty lane's corners are vertex 0 three times: a triangle of no area, never a candidate.
+struct alignas(64) IndexBlock {
+    int32_t corner[3][bvh_width];
+    int32_t first;
+    uint32_t lanes_more;
+};
+static_assert(sizeof(IndexBlock) == 64, "an index block is one cache line");
+
+// One corner of a block's four triangles, axis by axis: the four vertices loaded (16 bytes
+// each) and transposed into x, y and z lanes, converted to double (exactly).
+struct CornerLanes {
+    D4 axis[3];
+    CornerLanes(const float *vertices, const int32_t *corner) {
+        __m128 x = _mm_load_ps(vertices + corner[0]), y = _mm_load_ps(vertices + corner[1]),
+               z = _mm_load_ps(vertices + corner[2]), w = _mm_load_ps(vertices + corner[3]);
+        _MM_TRANSPOSE4_PS(x, y, z, w);
+        axis[0] = to_double(bit_cast<F4>(x));
+        axis[1] = to_double(bit_cast<F4>(y));
+        axis[2] = to_double(bit_cast<F4>(z));
+    }
+    D4 operator[](int k) const { return axis[k]; }
 };
 
-inline M4 block_candidates(const TriangleBlock &b, const WatertightRay &wr, const Interval &range) {
-    return triangle_candidates(b, wr, range);
-}
-inline M4 block_candidates(const FloatBlock &b, const WatertightRay &wr, const Interval &range) {
-    const FloatVertexLanes p0{b.p[0]}, p1{b.p[1]}, p2{b.p[2]};
-    return sheared_candidates<M4>(p0, p1, p2, wr.o, wr.kx, wr.ky, wr.kz, wr.Sx, wr.Sy, wr.Sz,
-                                  range.min, range.max);
-}
-
-// The triangles of one block (either kind) tested against one ray, in leaf order, as leaf_hit()
-// tests them: the block's candidates (block_candidates()) re-tested by intersect_triangle()
-// itself with the range shrunk by each hit. Counts each real triangle as one primitive test.
-// Returns whether one was hit; with `any`, stops at the first. The loop runs over the
-// candidates' bits only: a block's triangles (2 to 4) and its candidates (a tenth of a
-// candidate a ray, over all its blocks) are counted and picked without a branch per lane,
-// which the lanes' mix of outcomes made mispredict (a loop over the lanes that asked each
-// lane took a fifth of the Cornell box's time in a flat mesh's search, perf, issue 12).
-template <class Block>
-inline bool block_hits(const Block &block, const Mesh &mesh, const WatertightRay &wr,
-                          Interval &range, TriangleHit &best, int &best_triangle,
-                          uint64_t &primitive_tests, bool any) {
-    const M4 candidates = block_candidates(block, wr, range);
-    unsigned real = 0, picked = 0;
-    for (int l = 0; l < bvh_width; ++l) {
-        real |= unsigned(block.leaf[l] >= 0) << l;
-        picked |= unsigned(candidates[l] != 0) << l;
-    }
+// The triangles of one block tested against one ray, in leaf order, as leaf_hit() tests them:
+// the block's candidates (sheared_candidates(), all four lanes at once) re-tested by
+// intersect_triangle() itself with the range shrunk by each hit. Counts each real triangle as
+// one primitive test. Returns whether one was hit; with `any`, stops at the first. The loop
+// runs over the candidates' bits only: a block's triangles (2 to 4) and its candidates (a tenth
+// of a candidate a ray, over all its blocks) are counted and picked without a branch per lane,
+// which the lanes' mix of outcomes made mispredict (a loop over the lanes that asked each lane
+// took a fifth of the Cornell box's time in a flat mesh's search, perf, issue 12).
+// `vertex(k, l)`: lane l's corner k; `leaf(l)`: lane l's triangle in leaf order.
+template <class Vertex, class Leaf>
+inline bool candidates_hit(M4 candidates, unsigned real, Vertex vertex, Leaf leaf,
+                           const Mesh &mesh, const WatertightRay &wr, Interval &range,
+                           TriangleHit &best, int &best_triangle, uint64_t &primitive_tests,
+                           bool any) {
+    unsigned picked = 0;
+    for (int l = 0; l < bvh_width; ++l) picked |= unsigned(candidates[l] != 0) << l;
     primitive_tests += uint64_t(__builtin_popcount(real));
     bool found = false;
     for (unsigned bits = picked & real; bits != 0; bits &= bits - 1) {
         const int l = __builtin_ctz(bits);
-        Vec3 v[3];
-        for (int k = 0; k < 3; ++k)
-            v[k] = {double(block.p[k][0][l]), double(block.p[k][1][l]), double(block.p[k][2][l])};
+        const Vec3 v[3] = {vertex(0, l), vertex(1, l), vertex(2, l)};
         TriangleHit th;
         if (intersect_triangle(v[0], v[1], v[2], wr, range, th)) {
             best = th;
-            best_triangle = mesh.order[size_t(block.leaf[l])];
+            best_triangle = mesh.order[size_t(leaf(l))];
             range.max = th.t;
             found = true;
             if (any) return true;
@@ -306,34 +419,58 @@ inline bool block_hits(const Block &block, const Mesh &mesh, const WatertightRay
     return found;
 }
 
-// Eight floats to eight doubles (exactly), one AVX-512 instruction where there is one (the
-// vector extension's conversion became two halves and a merge).
-inline D8 to_double(const F8 &f) {
-#if defined(__AVX512F__)
-    return bit_cast<D8>(_mm512_maskz_cvtps_pd(0xff, bit_cast<__m256>(f)));
-#else
-    return __builtin_convertvector(f, D8);
-#endif
+inline bool block_hits(const TriangleBlock &block, const Mesh &mesh, const WatertightRay &wr,
+                       Interval &range, TriangleHit &best, int &best_triangle,
+                       uint64_t &primitive_tests, bool any) {
+    unsigned real = 0;
+    for (int l = 0; l < bvh_width; ++l) real |= unsigned(block.leaf[l] >= 0) << l;
+    return candidates_hit(
+        triangle_candidates(block, wr, range), real,
+        [&](int k, int l) -> Vec3 {
+            return {block.p[k][0][l], block.p[k][1][l], block.p[k][2][l]};
+        },
+        [&](int l) { return block.leaf[l]; }, mesh, wr, range, best, best_triangle,
+        primitive_tests, any);
+}
+
+// An IndexBlock's triangles, their corners read from `vertices` (WideBVH::vertex_floats).
+inline bool block_hits(const IndexBlock &block, const float *vertices, const Mesh &mesh,
+                       const WatertightRay &wr, Interval &range, TriangleHit &best,
+                       int &best_triangle, uint64_t &primitive_tests, bool any) {
+    const CornerLanes p0(vertices, block.corner[0]), p1(vertices, block.corner[1]),
+        p2(vertices, block.corner[2]);
+    const M4 candidates = sheared_candidates<M4>(p0, p1, p2, wr.o, wr.kx, wr.ky, wr.kz, wr.Sx,
+                                                 wr.Sy, wr.Sz, range.min, range.max);
+    return candidates_hit(
+        candidates, (1u << (block.lanes_more & 7u)) - 1,
+        [&](int k, int l) -> Vec3 {
+            const float *c = vertices + block.corner[k][l];
+            return {double(c[0]), double(c[1]), double(c[2])};
+        },
+        [&](int l) { return block.first + l; }, mesh, wr, range, best, best_triangle,
+        primitive_tests, any);
 }
 
 // slab_test() (14_box.h) for the eight children of a node: the same operations, lane by lane
-// (a name of its own: a lesson's region is named by its file, lesson and function).
-inline M8 slab_test8(const Node8 &node, const SlabRay &r, const Interval &range, D8 &t_near) {
+// (a name of its own: a lesson's region is named by its file, lesson and function), on the
+// planes read back from the quantised node (each exactly a double), lanes without a child
+// masked out.
+inline M8 slab_test8(const QNode8 &node, const SlabRay &r, const Interval &range, D8 &t_near) {
     // BEGIN SOLUTION L09
     // PROMPT: A copy, lane by lane, of slab_test() for the eight children of a wide node.
-    // Each plane converted to double (exactly) as it is read: only the six planes used.
-    D8 tx0 = (to_double(node.planes[r.near_x][0]) - r.o.x) * r.inv_d.x;
-    D8 tx1 = (to_double(node.planes[1 - r.near_x][0]) - r.o.x) * r.inv_d_far.x;
-    D8 ty0 = (to_double(node.planes[r.near_y][1]) - r.o.y) * r.inv_d.y;
-    D8 ty1 = (to_double(node.planes[1 - r.near_y][1]) - r.o.y) * r.inv_d_far.y;
-    D8 tz0 = (to_double(node.planes[r.near_z][2]) - r.o.z) * r.inv_d.z;
-    D8 tz1 = (to_double(node.planes[1 - r.near_z][2]) - r.o.z) * r.inv_d_far.z;
+    // Only the six planes used are read back (node_plane()).
+    D8 tx0 = (node_plane(node, r.near_x, 0) - r.o.x) * r.inv_d.x;
+    D8 tx1 = (node_plane(node, 1 - r.near_x, 0) - r.o.x) * r.inv_d_far.x;
+    D8 ty0 = (node_plane(node, r.near_y, 1) - r.o.y) * r.inv_d.y;
+    D8 ty1 = (node_plane(node, 1 - r.near_y, 1) - r.o.y) * r.inv_d_far.y;
+    D8 tz0 = (node_plane(node, r.near_z, 2) - r.o.z) * r.inv_d.z;
+    D8 tz1 = (node_plane(node, 1 - r.near_z, 2) - r.o.z) * r.inv_d_far.z;
     D8 lo = D8{} + range.min, hi = D8{} + range.max;
     lo = tx0 > lo ? tx0 : lo, hi = tx1 < hi ? tx1 : hi;
     lo = ty0 > lo ? ty0 : lo, hi = ty1 < hi ? ty1 : hi;
     lo = tz0 > lo ? tz0 : lo, hi = tz1 < hi ? tz1 : hi;
     t_near = lo;
-    return lo <= hi;
+    return (lo <= hi) & valid_lanes(node);
     // END SOLUTION
 }
 
@@ -446,28 +583,46 @@ struct WideBVH : MeshAccelerator {
         flat = nodes.size() == 1;
         for (int c = 0; c < nodes[0].children; ++c) flat = flat && nodes[0].child[c] < 0;
         if (flat) return;
-        // Any other mesh is searched in the eight-wide tree only (Search8).
-        build8(mesh);
-        nodes = {}, blocks = {};
+        // Any other mesh is searched in the eight-wide tree only (Search8), unless a box
+        // reaches beyond float's range (a vertex of 1e300): its node cannot be quantised, and
+        // the four-wide tree (infinite planes and all) is searched instead.
+        if (build8(mesh)) nodes = {}, blocks = {};
     }
 
     // -- the eight-wide tree (Search8), for every mesh that is not flat --------------------
-    HugeVector<Node8> nodes8;                // nodes8[0] is the root
+    HugeVector<QNode8> nodes8;               // nodes8[0] is the root
     HugeVector<TriangleBlock> double_blocks; // its leaves' blocks, for a mesh of doubles
-    HugeVector<FloatBlock> float_blocks;     // or for a mesh of floats (float_vertices)
+    HugeVector<IndexBlock> index_blocks;     // or for a mesh of floats (float_vertices)
+    HugeVector<float> vertex_floats;         // their corners: x, y, z, 0 a vertex
     bool float_vertices = false;
+    std::vector<Node8> build_nodes8;         // the tree as collapsed, before quantize()
 
-    void build8(const Mesh &mesh) {
-        float_vertices = true;
+    // The eight-wide tree; false (and no tree) where a node cannot be quantised.
+    bool build8(const Mesh &mesh) {
+        // IndexBlock's corners are 32-bit, four times a vertex's index.
+        float_vertices = mesh.vertices.size() <= size_t(std::numeric_limits<int32_t>::max() / 4);
         for (const Vec3 &v : mesh.leaf_vertices)
             for (int axis = 0; axis < 3; ++axis)
                 float_vertices = float_vertices && double(float(v[axis])) == v[axis];
-        nodes8.reserve(mesh.nodes.size() / 4 + 1);
+        if (float_vertices) {
+            vertex_floats.reserve(4 * mesh.vertices.size());
+            for (const Vec3 &v : mesh.vertices) // (a vertex no triangle uses may be rounded)
+                for (int axis = 0; axis < 4; ++axis)
+                    vertex_floats.push_back(axis < 3 ? float(v[axis]) : 0.0f);
+        }
+        build_nodes8.reserve(mesh.nodes.size() / 4 + 1);
         if (mesh.nodes[0].count > 0) { // one leaf: a root with that one child
-            nodes8.emplace_back();
+            build_nodes8.emplace_back();
             set_child8(mesh, 0, 0, 0);
         } else
             collapse8(mesh, 0);
+        nodes8.resize(build_nodes8.size());
+        bool quantised = true;
+        for (size_t k = 0; k < build_nodes8.size() && quantised; ++k)
+            quantised = quantize(build_nodes8[k], nodes8[k]);
+        build_nodes8 = {};
+        if (!quantised) nodes8 = {}, double_blocks = {}, index_blocks = {}, vertex_floats = {};
+        return quantised;
     }
 
     static void set_box8(Node8 &w, int c, const AABB &box) {
@@ -485,8 +640,8 @@ struct WideBVH : MeshAccelerator {
 
     // collapse() with eight children a node.
     int collapse8(const Mesh &mesh, int binary) {
-        const int index = int(nodes8.size());
-        nodes8.emplace_back();
+        const int index = int(build_nodes8.size());
+        build_nodes8.emplace_back();
         int kids[bvh8_width];
         const int n = wide_children(mesh, binary, bvh8_width, kids);
         for (int c = 0; c < n; ++c) set_child8(mesh, index, c, kids[c]);
@@ -495,27 +650,29 @@ struct WideBVH : MeshAccelerator {
 
     void set_child8(const Mesh &mesh, int index, int c, int binary) {
         const BVHNode &k = mesh.nodes[size_t(binary)];
-        set_box8(nodes8[size_t(index)], c, k.bounds);
+        set_box8(build_nodes8[size_t(index)], c, k.bounds);
         if (k.count == 0) {
             int child = collapse8(mesh, binary);
-            nodes8[size_t(index)].child[c] = uint32_t(child);
+            build_nodes8[size_t(index)].child[c] = uint32_t(child);
             return;
         }
-        const size_t first = float_vertices ? float_blocks.size() : double_blocks.size();
-        nodes8[size_t(index)].child[c] = leaf_code | uint32_t(first);
+        const size_t first = float_vertices ? index_blocks.size() : double_blocks.size();
+        build_nodes8[size_t(index)].child[c] = leaf_code | uint32_t(first);
         for (int f = k.first; f < k.first + k.count; f += bvh_width) {
             const TriangleBlock b = make_block(mesh, f, k.first + k.count);
             if (!float_vertices) {
                 double_blocks.push_back(b);
                 continue;
             }
-            FloatBlock fb{};
-            for (int v = 0; v < 3; ++v)
-                for (int axis = 0; axis < 3; ++axis)
-                    fb.p[v][axis] = __builtin_convertvector(b.p[v][axis], F4);
-            for (int l = 0; l < bvh_width; ++l) fb.leaf[l] = b.leaf[l];
-            fb.more = b.more;
-            float_blocks.push_back(fb);
+            IndexBlock ib{}; // empty lanes: vertex 0 three times
+            int lanes = 0;
+            for (; lanes < bvh_width && b.leaf[lanes] >= 0; ++lanes) {
+                const auto &t = mesh.triangles[size_t(mesh.order[size_t(b.leaf[lanes])])];
+                for (int v = 0; v < 3; ++v) ib.corner[v][lanes] = 4 * t[size_t(v)];
+            }
+            ib.first = f;
+            ib.lanes_more = uint32_t(lanes) | (b.more ? 8u : 0u);
+            index_blocks.push_back(ib);
         }
     }
 
@@ -752,19 +909,18 @@ template <class Block> struct Search8 {
 
     // Every line of the block or node a code names, without a branch on which (a node's
     // children mix the two unpredictably): addresses as integers, chosen by a conditional move;
-    // a line that only one of the two has is asked for in the other as a repeat of its first.
+    // a line that only a TriangleBlock has is asked for in a node as a repeat of its first.
+    // Two lines of an IndexBlock: the second is the leaf's next block, if it has one.
     void prefetch(uint32_t code) const {
-        static_assert(sizeof(Node8) == 4 * 64 && sizeof(Block) >= 3 * 64 &&
-                      sizeof(Block) <= 5 * 64);
+        static_assert(sizeof(QNode8) == 2 * 64 && (sizeof(Block) == 64 || sizeof(Block) == 5 * 64));
         const bool leaf = code & leaf_code;
         const uintptr_t index = code & ~leaf_code;
         const uintptr_t p = leaf ? uintptr_t(blocks) + index * sizeof(Block)
-                                 : uintptr_t(bvh.nodes8.data()) + index * sizeof(Node8);
+                                 : uintptr_t(bvh.nodes8.data()) + index * sizeof(QNode8);
         auto line = [p](uintptr_t at) { __builtin_prefetch(reinterpret_cast<void *>(p + at)); };
-        line(0), line(64), line(128);
-        const bool four = !leaf || sizeof(Block) > 3 * 64, five = leaf && sizeof(Block) > 4 * 64;
-        line(four ? 3 * 64 : 0);
-        if (sizeof(Block) > 4 * 64) line(five ? 4 * 64 : 0);
+        line(0), line(64);
+        if constexpr (sizeof(Block) > 2 * 64)
+            for (uintptr_t at = 2 * 64; at < sizeof(Block); at += 64) line(leaf ? at : 0);
     }
 
     // One node or leaf; false when the search is over.
@@ -789,9 +945,17 @@ template <class Block> struct Search8 {
     bool leaf(uint32_t first_block) {
         for (uint32_t b = first_block, more = 1; more; ++b) {
             const Block &block = blocks[b];
-            more = uint32_t(block.more);
-            if (block_hits(block, mesh, wr, range, best, best_triangle, primitive_tests,
-                              any)) {
+            bool hit;
+            if constexpr (std::is_same_v<Block, IndexBlock>) {
+                more = block.lanes_more >> 3;
+                hit = block_hits(block, bvh.vertex_floats.data(), mesh, wr, range, best,
+                                 best_triangle, primitive_tests, any);
+            } else {
+                more = uint32_t(block.more);
+                hit = block_hits(block, mesh, wr, range, best, best_triangle, primitive_tests,
+                                 any);
+            }
+            if (hit) {
                 found = true;
                 if (any) return top = 0, false;
             }
@@ -800,7 +964,7 @@ template <class Block> struct Search8 {
     }
 
     void node(uint32_t index) {
-        const Node8 &node = bvh.nodes8[index];
+        const QNode8 &node = bvh.nodes8[index];
         D8 t_near;
         const M8 hit = slab_test8(node, sr, range, t_near);
         const unsigned bits = lane_bits8(hit);
@@ -850,7 +1014,7 @@ inline bool WideBVH::traverse(const Mesh &mesh, const Ray &ray, Interval range, 
         return finish(search, best, best_triangle, counts);
     }
     if (float_vertices) {
-        Search8<FloatBlock> search(*this, float_blocks.data(), mesh, ray, range, any);
+        Search8<IndexBlock> search(*this, index_blocks.data(), mesh, ray, range, any);
         return finish(search, best, best_triangle, counts);
     }
     Search8<TriangleBlock> search(*this, double_blocks.data(), mesh, ray, range, any);
@@ -954,10 +1118,10 @@ inline void closest_mesh_hits(const Scene &scene, const double *origins,
                 },
                 t_out, object_out, triangle_out, counts);
         } else if (wide->float_vertices) {
-            interleaved_searches<Search8<FloatBlock>>(
+            interleaved_searches<Search8<IndexBlock>>(
                 mesh, start, end,
-                [&](std::optional<Search8<FloatBlock>> &s, size_t i) {
-                    s.emplace(*wide, wide->float_blocks.data(), mesh, ray_at(i), all, false);
+                [&](std::optional<Search8<IndexBlock>> &s, size_t i) {
+                    s.emplace(*wide, wide->index_blocks.data(), mesh, ray_at(i), all, false);
                 },
                 t_out, object_out, triangle_out, counts);
         } else {
