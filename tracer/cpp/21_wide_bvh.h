@@ -356,7 +356,7 @@ inline M8 valid_lanes(const QNode8 &node) {
 }
 
 // Four triangles of a leaf, for a mesh whose vertices are all floats (a scanned mesh read from
-// a PLY file of floats, like the bunny): each corner as its vertex's index in a copy of the
+// a PLY file of floats, like the bunny): each corner as its vertex's place in a copy of the
 // vertices in float, four floats a vertex (x, y, z, 0), times 4. Each converts back to the very
 // same double, so the block tested in double is TriangleBlock's test bit for bit, from one
 // cache line instead of five; a leaf's vertices are shared with its neighbours', and the copy
@@ -596,19 +596,30 @@ struct WideBVH : MeshAccelerator {
     HugeVector<float> vertex_floats;         // their corners: x, y, z, 0 a vertex
     bool float_vertices = false;
     std::vector<Node8> build_nodes8;         // the tree as collapsed, before quantize()
+    std::vector<int> vertex_slot;            // a vertex's corner index (4 x its place in the copy)
 
     // The eight-wide tree; false (and no tree) where a node cannot be quantised.
     bool build8(const Mesh &mesh) {
-        // IndexBlock's corners are 32-bit, four times a vertex's index.
+        // IndexBlock's corners are 32-bit, four times a vertex's place in the copy.
         float_vertices = mesh.vertices.size() <= size_t(std::numeric_limits<int32_t>::max() / 4);
         for (const Vec3 &v : mesh.leaf_vertices)
             for (int axis = 0; axis < 3; ++axis)
                 float_vertices = float_vertices && double(float(v[axis])) == v[axis];
+        // The copy holds the vertices in the order the leaves first use them, so that a leaf's
+        // corners lie on a few neighbouring cache lines (1.015x on the bunny's diffuse rays,
+        // six alternating rounds, against the mesh's own order).
         if (float_vertices) {
+            vertex_slot.assign(mesh.vertices.size(), -1);
             vertex_floats.reserve(4 * mesh.vertices.size());
-            for (const Vec3 &v : mesh.vertices) // (a vertex no triangle uses may be rounded)
-                for (int axis = 0; axis < 4; ++axis)
-                    vertex_floats.push_back(axis < 3 ? float(v[axis]) : 0.0f);
+            for (size_t i = 0; i < mesh.order.size(); ++i)
+                for (int k = 0; k < 3; ++k) {
+                    const Vec3 &v = mesh.leaf_vertices[3 * i + size_t(k)];
+                    int &slot = vertex_slot[size_t(mesh.triangles[size_t(mesh.order[i])][size_t(k)])];
+                    if (slot >= 0) continue;
+                    slot = int(vertex_floats.size());
+                    for (int axis = 0; axis < 4; ++axis)
+                        vertex_floats.push_back(axis < 3 ? float(v[axis]) : 0.0f);
+                }
         }
         build_nodes8.reserve(mesh.nodes.size() / 4 + 1);
         if (mesh.nodes[0].count > 0) { // one leaf: a root with that one child
@@ -620,7 +631,7 @@ struct WideBVH : MeshAccelerator {
         bool quantised = true;
         for (size_t k = 0; k < build_nodes8.size() && quantised; ++k)
             quantised = quantize(build_nodes8[k], nodes8[k]);
-        build_nodes8 = {};
+        build_nodes8 = {}, vertex_slot = {};
         if (!quantised) nodes8 = {}, double_blocks = {}, index_blocks = {}, vertex_floats = {};
         return quantised;
     }
@@ -668,7 +679,7 @@ struct WideBVH : MeshAccelerator {
             int lanes = 0;
             for (; lanes < bvh_width && b.leaf[lanes] >= 0; ++lanes) {
                 const auto &t = mesh.triangles[size_t(mesh.order[size_t(b.leaf[lanes])])];
-                for (int v = 0; v < 3; ++v) ib.corner[v][lanes] = 4 * t[size_t(v)];
+                for (int v = 0; v < 3; ++v) ib.corner[v][lanes] = vertex_slot[size_t(t[size_t(v)])];
             }
             ib.first = f;
             ib.lanes_more = uint32_t(lanes) | (b.more ? 8u : 0u);
