@@ -266,11 +266,11 @@ inline D4 to_double(const F4 &f) {
 // search still misses no box the lecture's search meets; it meets a few more (on the bunny's
 // incoherent rays, 2% more nodes and primitive tests).
 // Why: an incoherent ray's nodes and leaves are cache misses, and the bunny's eight-wide tree
-// (2.5 MB of Node8, 6.2 MB of FloatBlock leaves) did not fit the part of this machine's 32 MB
-// shared L3 that its neighbours leave: a chain of loads through 4 MB took 26-52 ns a step,
-// through 8 MB 134 ns, through 16 MB 150 ns (issue 12). 128 bytes a node instead of 256, and
-// one line a leaf (IndexBlock) instead of three, took the bunny's tree from 8.7 MB to 4.0 MB
-// and its incoherent rays 1.3x-1.8x faster.
+// (2.5 MB of Node8, 6.2 MB of leaves of four triangles in float, 192 bytes each) did not fit
+// the part of this machine's 32 MB shared L3 that its neighbours leave: a chain of dependent
+// loads through 4 MB took 26-52 ns a step, through 8 MB 134 ns, through 16 MB 150 ns (issue
+// 12). 128 bytes a node instead of 256, and one line a leaf (IndexBlock) instead of three, took
+// the bunny's tree from 8.7 MB to 4.0 MB and its incoherent rays 1.3x-1.8x faster.
 // `valid`: the lanes with a child (bit c: lane c); the others are masked out of the slab test.
 struct alignas(64) QNode8 {
     float origin[3], scale[3];
