@@ -574,10 +574,12 @@ struct PixelRect {
 // The box's eight corners projected at once, one per lane.
 inline PixelRect pixel_rect(const Camera &cam, const AABB &box) {
     static_assert(rays_per_packet == 8, "a lane per corner");
-    Vec3L c;
-    for (int k = 0; k < 8; ++k)
-        c.x[k] = k & 1 ? box.max.x : box.min.x, c.y[k] = k & 2 ? box.max.y : box.min.y,
-        c.z[k] = k & 4 ? box.max.z : box.min.z;
+    // Corner k takes the max on axis a where bit a of k is set.
+    const Mask on_x = {0, -1, 0, -1, 0, -1, 0, -1}, on_y = {0, 0, -1, -1, 0, 0, -1, -1},
+               on_z = {0, 0, 0, 0, -1, -1, -1, -1};
+    const Vec3L c{on_x ? splat(box.max.x) : splat(box.min.x),
+                  on_y ? splat(box.max.y) : splat(box.min.y),
+                  on_z ? splat(box.max.z) : splat(box.min.z)};
     const Vec3L v = c - splat(cam.eye);
     const Lanes depth = dot(v, splat(cam.forward));
     if (any(~(depth > 0))) return PixelRect{}; // at or behind the eye (or not finite): all
