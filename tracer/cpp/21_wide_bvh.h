@@ -296,8 +296,10 @@ inline bool quantize(const Node8 &node, QNode8 &out) {
     for (int axis = 0; axis < 3; ++axis) {
         float lo = std::numeric_limits<float>::infinity(), hi = -lo;
         for (int c = 0; c < bvh8_width; ++c)
-            if (out.valid >> c & 1)
-                lo = std::min(lo, node.planes[0][axis][c]), hi = std::max(hi, node.planes[1][axis][c]);
+            if (out.valid >> c & 1) {
+                lo = std::min(lo, node.planes[0][axis][c]);
+                hi = std::max(hi, node.planes[1][axis][c]);
+            }
         if (!std::isfinite(lo) || !std::isfinite(hi)) return false;
         // The origin is the lowest plane (read back exactly: fma(0, scale, lo) = lo); the scale
         // the smallest power of two that might reach the highest plane in 255 steps, doubled
@@ -314,13 +316,16 @@ inline bool quantize(const Node8 &node, QNode8 &out) {
                     out.q[0][axis][c] = 255, out.q[1][axis][c] = 0;
                     continue;
                 }
-                const float child_lo = node.planes[0][axis][c], child_hi = node.planes[1][axis][c];
-                int q_lo = int(std::clamp(std::floor((double(child_lo) - lo) / scale), 0.0, 255.0));
+                const float child_lo = node.planes[0][axis][c];
+                const float child_hi = node.planes[1][axis][c];
+                const auto steps = [&](double plane) { return (plane - double(lo)) / scale; };
+                int q_lo = int(std::clamp(std::floor(steps(child_lo)), 0.0, 255.0));
                 while (q_lo > 0 && dequantize(q_lo, scale, lo) > child_lo) --q_lo;
-                int q_hi = int(std::clamp(std::ceil((double(child_hi) - lo) / scale), 0.0, 255.0));
+                int q_hi = int(std::clamp(std::ceil(steps(child_hi)), 0.0, 255.0));
                 while (q_hi <= 255 && dequantize(q_hi, scale, lo) < child_hi) ++q_hi;
                 fits = q_hi <= 255;
-                out.q[0][axis][c] = uint8_t(q_lo), out.q[1][axis][c] = uint8_t(std::min(q_hi, 255));
+                out.q[0][axis][c] = uint8_t(q_lo);
+                out.q[1][axis][c] = uint8_t(std::min(q_hi, 255));
             }
             if (fits) out.origin[axis] = lo, out.scale[axis] = scale;
         }
@@ -363,7 +368,8 @@ inline M8 valid_lanes(const QNode8 &node) {
 // (16 bytes a vertex: 0.8 MB for the bunny) stays in the cache better than the leaves would.
 // Lane l is the triangle `first` + l in leaf order (TriangleBlock's leaf[l]); `lanes_more`:
 // the number of triangles (1 to 4) in bits 0-2, the leaf's next block follows if bit 3 is set.
-// An empty lane's corners are vertex 0 three times: a triangle of no area, never a candidate.
+// An empty lane's corners are the copy's first vertex three times: a triangle of no area,
+// never a candidate.
 struct alignas(64) IndexBlock {
     int32_t corner[3][bvh_width];
     int32_t first;
@@ -614,7 +620,8 @@ struct WideBVH : MeshAccelerator {
             for (size_t i = 0; i < mesh.order.size(); ++i)
                 for (int k = 0; k < 3; ++k) {
                     const Vec3 &v = mesh.leaf_vertices[3 * i + size_t(k)];
-                    int &slot = vertex_slot[size_t(mesh.triangles[size_t(mesh.order[i])][size_t(k)])];
+                    const auto &triangle = mesh.triangles[size_t(mesh.order[i])];
+                    int &slot = vertex_slot[size_t(triangle[size_t(k)])];
                     if (slot >= 0) continue;
                     slot = int(vertex_floats.size());
                     for (int axis = 0; axis < 4; ++axis)
@@ -923,7 +930,8 @@ template <class Block> struct Search8 {
     // a line that only a TriangleBlock has is asked for in a node as a repeat of its first.
     // Two lines of an IndexBlock: the second is the leaf's next block, if it has one.
     void prefetch(uint32_t code) const {
-        static_assert(sizeof(QNode8) == 2 * 64 && (sizeof(Block) == 64 || sizeof(Block) == 5 * 64));
+        static_assert(sizeof(QNode8) == 2 * 64 &&
+                      (sizeof(Block) == 64 || sizeof(Block) == 5 * 64));
         const bool leaf = code & leaf_code;
         const uintptr_t index = code & ~leaf_code;
         const uintptr_t p = leaf ? uintptr_t(blocks) + index * sizeof(Block)
