@@ -20,13 +20,25 @@ from tracer.render import to_core
 from tracer.scene import Mesh, load_scene
 
 
+def _bunny_scene():
+    """The bunny's scene and its mesh."""
+    scene = load_scene(SCENES / "bunny.toml")
+    return scene, next(o for o in scene.objects if isinstance(o, Mesh))
+
+
+def _core_of(vertices, faces):
+    """The bunny's scene with the bunny replaced by this mesh, alone."""
+    scene, mesh = _bunny_scene()
+    mesh = dataclasses.replace(mesh, vertices=vertices, faces=faces)
+    return to_core(dataclasses.replace(scene, objects=(mesh,)))
+
+
 def _bunny_core(scale: float):
     """The bunny alone, its vertices times `scale` (1: floats, as read; else doubles that no
     float equals, so its leaves are TriangleBlocks)."""
-    scene = load_scene(SCENES / "bunny.toml")
-    mesh = next(o for o in scene.objects if isinstance(o, Mesh))
+    _, mesh = _bunny_scene()
     mesh = dataclasses.replace(mesh, vertices=np.asarray(mesh.vertices) * scale)
-    return mesh, to_core(dataclasses.replace(scene, objects=(mesh,)))
+    return mesh, _core_of(mesh.vertices, mesh.faces)
 
 
 @pytest.mark.parametrize("scale", [1.0, 1 + 2**-40])
@@ -97,13 +109,6 @@ def _grid(offset, size: float, n: int = 48, floats: bool = True, lift: float = 0
                             np.stack([k, k + 1, k + n + 2, k + n + 1], 1)])  # fmt: skip
     faces = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]]).astype(np.int32)
     return vertices, faces
-
-
-def _core_of(vertices, faces):
-    scene = load_scene(SCENES / "bunny.toml")
-    mesh = next(o for o in scene.objects if isinstance(o, Mesh))
-    mesh = dataclasses.replace(mesh, vertices=vertices, faces=faces)
-    return to_core(dataclasses.replace(scene, objects=(mesh,)))
 
 
 @pytest.mark.parametrize("floats", [True, False])

@@ -676,20 +676,20 @@ struct WideBVH : MeshAccelerator {
         }
         const size_t first = float_vertices ? index_blocks.size() : double_blocks.size();
         build_nodes8[size_t(index)].child[c] = leaf_code | uint32_t(first);
-        for (int f = k.first; f < k.first + k.count; f += bvh_width) {
-            const TriangleBlock b = make_block(mesh, f, k.first + k.count);
+        const int end = k.first + k.count;
+        for (int f = k.first; f < end; f += bvh_width) {
             if (!float_vertices) {
-                double_blocks.push_back(b);
+                double_blocks.push_back(make_block(mesh, f, end));
                 continue;
             }
-            IndexBlock ib{}; // empty lanes: vertex 0 three times
-            int lanes = 0;
-            for (; lanes < bvh_width && b.leaf[lanes] >= 0; ++lanes) {
-                const auto &t = mesh.triangles[size_t(mesh.order[size_t(b.leaf[lanes])])];
-                for (int v = 0; v < 3; ++v) ib.corner[v][lanes] = vertex_slot[size_t(t[size_t(v)])];
+            IndexBlock ib{}; // empty lanes: the copy's first vertex three times
+            const int lanes = std::min(bvh_width, end - f);
+            for (int l = 0; l < lanes; ++l) {
+                const auto &t = mesh.triangles[size_t(mesh.order[size_t(f + l)])];
+                for (int v = 0; v < 3; ++v) ib.corner[v][l] = vertex_slot[size_t(t[size_t(v)])];
             }
             ib.first = f;
-            ib.lanes_more = uint32_t(lanes) | (b.more ? 8u : 0u);
+            ib.lanes_more = uint32_t(lanes) | (f + bvh_width < end ? 8u : 0u);
             index_blocks.push_back(ib);
         }
     }
