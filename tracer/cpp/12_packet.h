@@ -235,12 +235,12 @@ inline ClosestL closest_hit(const Scene &scene, const RayL &ray, Mask active, Ra
 
 // 09_scene.h any_hit(), per lane, for the lanes of `active`. (Shadow rays to a point light all
 // end at it: a lane whose ray leaves the cone in which the light sees a sphere, or a sphere
-// outside the cone of the packet's rays, needs no test. Both were tried, with margins far above the roundings: they
-// ruled out 2.6 of Ex 25's 3 sphere tests per packet of shadow rays and still cost more than
-// the tests they saved: the packet's cone by its serial reductions, square roots and divisions
-// (0.7x to 0.8x the speed), the per-lane one by its own work and branch (0.97x). Skipping the
-// plane's division where no lane can have t > 0 gained nothing either; sphere_t()'s two early
-// outs do pay: without them 0.7x. Issue 12.)
+// outside the cone of the packet's rays, needs no test. Both were tried, with margins far
+// above the roundings: they ruled out 2.6 of Ex 25's 3 sphere tests per packet of shadow rays
+// and still cost more than the tests they saved: the packet's cone by its serial reductions,
+// square roots and divisions (0.7x to 0.8x the speed), the per-lane one by its own work and
+// branch (0.97x). Skipping the plane's division where no lane can have t > 0 gained nothing
+// either; sphere_t()'s two early outs do pay: without them 0.7x. Issue 12.)
 inline Mask any_hit(const Scene &scene, const RayL &ray, Lanes max, Mask active,
                     RayCounts &counts) {
     Mask blocked = mask_all(false);

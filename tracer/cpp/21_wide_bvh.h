@@ -617,16 +617,17 @@ struct WideBVH : MeshAccelerator {
         if (float_vertices) {
             vertex_slot.assign(mesh.vertices.size(), -1);
             vertex_floats.reserve(4 * mesh.vertices.size());
-            for (size_t i = 0; i < mesh.order.size(); ++i)
+            for (size_t i = 0; i < mesh.order.size(); ++i) {
+                const auto &triangle = mesh.triangles[size_t(mesh.order[i])];
                 for (int k = 0; k < 3; ++k) {
                     const Vec3 &v = mesh.leaf_vertices[3 * i + size_t(k)];
-                    const auto &triangle = mesh.triangles[size_t(mesh.order[i])];
                     int &slot = vertex_slot[size_t(triangle[size_t(k)])];
                     if (slot >= 0) continue;
                     slot = int(vertex_floats.size());
                     for (int axis = 0; axis < 4; ++axis)
                         vertex_floats.push_back(axis < 3 ? float(v[axis]) : 0.0f);
                 }
+            }
         }
         build_nodes8.reserve(mesh.nodes.size() / 4 + 1);
         if (mesh.nodes[0].count > 0) { // one leaf: a root with that one child
