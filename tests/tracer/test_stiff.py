@@ -208,3 +208,31 @@ def test_power_matches_libm_pow():
     assert worst < 5e-13
     assert _core.power(1.0, 60.0) == 1.0
     assert _core.power(0.5, 2.0) == pytest.approx(0.25, rel=1e-15)
+
+
+def test_power_of_a_whole_exponent_by_squaring_is_within_its_bound():
+    """A whole exponent 1 <= n <= 1024 goes by repeated squaring (power.h): n - 1 roundings at
+    most, so a relative error within gamma(n - 1) = (n - 1) u / (1 - (n - 1) u), u = 2^-53,
+    against x^n computed exactly (Fraction); exact where no rounding happens (powers of two,
+    n = 1). Both ends of the range, and the exponents just outside it, which take exp(n ln x)."""
+    u = 2.0**-53
+    rng = random.Random(11)
+    exponents = [1, 2, 3, 10, 60, 255, 256, 1023, 1024] + [rng.randint(1, 1024) for _ in range(60)]
+    worst = 0.0
+    for n in exponents:
+        for x in (rng.uniform(1e-3, 1.0), rng.uniform(0.9, 1.0), 1 - rng.random() * 1e-9):
+            exact = Fraction(x) ** n
+            if exact < Fraction(2.0**-1022):
+                continue
+            got = _core.power(x, float(n))
+            bound = (n - 1) * u / (1 - (n - 1) * u)
+            error = abs(Fraction(got) - exact) / exact
+            assert error <= bound, (x, n, float(error), bound)
+            worst = max(worst, float(error))
+    assert worst > 0  # roundings did happen: the bound was tested, not only exact cases
+    assert _core.power(0.5, 1024.0) == 0.0  # 2^-1024, below 2^-1022: flushed to 0, as before
+    assert _core.power(0.5, 1000.0) == 2.0**-1000
+    assert _core.power(0.75, 1.0) == 0.75
+    # Just outside the range, and not whole: exp(n ln x), whose error grows with |n ln x|.
+    for x, n in ((0.999, 1025.0), (0.999, 60.5), (0.999, 0.5)):
+        assert _core.power(x, n) == pytest.approx(math.pow(x, n), rel=5e-13)

@@ -482,6 +482,19 @@ NB_MODULE(_core, m) {
 
     m.def("power", [](double x, double n) { return rt::power(x, n); }, "x"_a, "n"_a,
           "x^n as the Phong term computes it (power.h), for 0 < x <= 1 and n > 0.");
+    m.def(
+        "power_lanes",
+        [](std::array<double, rt::rays_per_packet> x, std::array<double, rt::rays_per_packet> n) {
+            rt::Lanes xl, nl;
+            for (int k = 0; k < rt::rays_per_packet; ++k)
+                xl[k] = x[size_t(k)], nl[k] = n[size_t(k)];
+            const rt::Lanes r = rt::power(xl, nl);
+            std::array<double, rt::rays_per_packet> out;
+            for (int k = 0; k < rt::rays_per_packet; ++k) out[size_t(k)] = r[k];
+            return out;
+        },
+        "x"_a, "n"_a,
+        "power() for a packet's 8 lanes at once, as the packet tracer computes it (12_packet.h).");
 
     m.def(
         "offset_ray_origin",
