@@ -65,6 +65,36 @@ def test_two_meshes_and_an_oblique_camera():
     assert {0.0, 1.0} <= ids  # both meshes are seen
 
 
+# The eye on a triangle: every ray meets that triangle at a t within rounding of 0, where
+# intersect_triangle()'s t-error guard decides, which 22_mesh_packets.h computes lane by lane,
+# asking starts_off_the_plane_heading_in() for each doubtful lane. "centroid": the centroid of a
+# bunny's triangle, within rounding of its plane, so that the question says yes for some rays;
+# "plane": a triangle in the plane z = 0 and the eye exactly in it, so that it says no. With the
+# question left out, every doubtful lane rejected or every one accepted, one of these images
+# differed from the one-ray code's (both tried by editing 22_mesh_packets.h).
+@pytest.mark.parametrize("on", ["centroid", "plane"])
+def test_an_eye_on_a_triangle(on):
+    scene = meshes_only("bunny.toml", width=64, height=48)
+    bunny = scene.objects[0]
+    if on == "centroid":
+        eye = bunny.vertices[bunny.faces[5000]].mean(axis=0)
+        look_at = (bunny.vertices.min(axis=0) + bunny.vertices.max(axis=0)) / 2
+    else:
+        corners = np.array([[-10.0, -10.0], [10.0, -10.0], [0.0, 10.0]])
+        vertices = np.vstack([np.c_[corners, np.zeros(3)], np.c_[corners, np.ones(3)]])
+        faces = np.array([[0, 1, 2], [3, 4, 5]], dtype=np.int32)
+        bunny = dataclasses.replace(bunny, vertices=vertices, faces=faces, smooth=False,
+                                    normals=None)  # fmt: skip
+        eye, look_at = np.array([0.25, 0.5, 0.0]), np.array([3.0, 1.0, 0.2])
+    camera = dataclasses.replace(scene.camera, eye=tuple(eye.tolist()),
+                                 look_at=tuple(look_at.tolist()), fov_y=120.0)  # fmt: skip
+    scene = dataclasses.replace(scene, camera=camera, objects=(bunny,))
+    packets, plain = both(scene)
+    assert (packets.integrator, plain.integrator) == ("aov_packets", "aov")
+    assert np.array_equal(packets.image, plain.image)
+    assert np.isfinite(plain.image[..., 0]).mean() > 0.2  # it sees the mesh
+
+
 def test_scenes_with_other_objects_trace_one_ray_at_a_time():
     """A plane beside the bunny: the packets do not serve the scene, and the image is the
     one-ray code's all the same."""

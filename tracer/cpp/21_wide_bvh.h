@@ -173,9 +173,9 @@ inline M4 slab_test(const WideNode &node, const SlabRay &r, const Interval &rang
 // The first steps of intersect_triangle() (15_triangle.h) lane by lane: shear, edge functions,
 // the inside test, det != 0 and the range test, the same operations in the same order, so a
 // lane is true exactly where intersect_triangle() gets past them. Only those go on to the rest
-// of the test (the t-error guard), in intersect_triangle() itself. Lanes are either four
-// triangles and one ray (below: p0, p1, p2 vectors of lanes, o and S doubles) or one triangle
-// and a packet of rays (22_mesh_packets.h: p0, p1, p2 doubles, o and S vectors of lanes).
+// of the test (the t-error guard), in intersect_triangle() itself. The lanes are four triangles
+// and one ray (p0, p1, p2 vectors of lanes, o and S doubles); 22_mesh_packets.h carries the
+// whole test over one triangle and a packet of rays.
 // M, the mask type, is named by the caller: a student's tree replaces the body with a stub, from
 // which no return type could be deduced.
 template <class M, class P, class O, class S, class R>

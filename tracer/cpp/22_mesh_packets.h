@@ -7,9 +7,9 @@
 // own range, so a ray sees a few boxes more than its own search would, never fewer.
 //
 // Each ray's answer is its own search's: the box test is slab_test()'s arithmetic lane by lane
-// (a lane's decision is the one-ray decision), and a triangle is accepted only by
-// intersect_triangle() itself, for that ray with that ray's range, in leaf order; the lanes only
-// pick, with the same first steps of that test, which rays are worth the call. What may differ
+// (a lane's decision is the one-ray decision), and a triangle is accepted by intersect_triangle()'s
+// arithmetic lane by lane too, for each ray with that ray's range, in leaf order (or by
+// intersect_triangle() itself, a ray at a time, where the rays' sheared axes differ). What may differ
 // is the order in which leaves are reached, and so which of two triangles hit at exactly the
 // same t (an edge they share) is kept, as with the wide hierarchy (21_wide_bvh.h);
 // tests/tracer/test_mesh_packets.py renders every mesh scene both ways.
@@ -155,13 +155,68 @@ inline void watertight(MeshRaysL &r) {
     // END SOLUTION
 }
 
-// 21_wide_bvh.h sheared_candidates() for one triangle and the packet's rays (which share kx,
-// ky, kz): the rays whose intersect_triangle() gets past its first steps. Only those are worth
-// the call.
-inline Mask triangle_candidates(const Vec3 *v, const MeshRaysL &r, Lanes min, Lanes max) {
+// 15_triangle.h larger() and triangle_t_error(), lane by lane: the same operations in the same
+// order, so each lane's bound is the one-ray bound's bits.
+inline Lanes larger(Lanes a, Lanes b) { return select(b != b, a, select(a > b, a, b)); }
+inline Lanes triangle_t_error(const Vec3L &a, const Vec3L &b, const Vec3L &c, Lanes e0, Lanes e1,
+                              Lanes e2, Lanes inv_det) {
+    Lanes max_z = larger(fabs(a.z), larger(fabs(b.z), fabs(c.z)));
+    Lanes max_x = larger(fabs(a.x), larger(fabs(b.x), fabs(c.x)));
+    Lanes max_y = larger(fabs(a.y), larger(fabs(b.y), fabs(c.y)));
+    Lanes delta_z = gamma(3) * max_z;
+    Lanes delta_x = gamma(5) * (max_x + max_z), delta_y = gamma(5) * (max_y + max_z);
+    Lanes delta_e = 2 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+    Lanes max_e = larger(fabs(e0), larger(fabs(e1), fabs(e2)));
+    return 3 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * fabs(inv_det);
+}
+
+// intersect_triangle()'s answer for a packet's rays: t and the barycentric coordinates per lane.
+struct TriangleHitL {
+    Lanes t, b0, b1, b2;
+};
+
+// 15_triangle.h intersect_triangle() for one triangle and the rays of `lanes` (which share kx,
+// ky, kz: MeshRaysL::shared_axes), all lanes at once: the same operations in the same order, so
+// a lane is true exactly where intersect_triangle() returns true for that ray and range, and
+// there th's lanes are its t and barycentric coordinates (elsewhere they mean nothing). The rare lane whose hit is within
+// the error of t of range.min asks starts_off_the_plane_heading_in() on its own. A primary ray
+// meets a bunny's triangle in a few lanes of eight: one call per such lane, each shearing the
+// triangle again, cost more than this test in all eight (perf, issue 12).
+inline Mask intersect_triangle(const Vec3 &p0, const Vec3 &p1, const Vec3 &p2, const MeshRaysL &r,
+                               Mask lanes, Lanes min, Lanes max, TriangleHitL &th) {
+    // BEGIN SOLUTION L08
+    // PROMPT: A copy, lane by lane, of intersect_triangle() for a packet of rays.
     const Lanes o[3] = {r.o.x, r.o.y, r.o.z};
-    return sheared_candidates<Mask>(v[0], v[1], v[2], o, r.kx, r.ky, r.kz, r.Sx, r.Sy, r.Sz, min,
-                                    max);
+    const int kx = r.kx, ky = r.ky, kz = r.kz;
+    const Lanes a_x = p0[kx] - o[kx], a_y = p0[ky] - o[ky], a_z = p0[kz] - o[kz];
+    const Lanes b_x = p1[kx] - o[kx], b_y = p1[ky] - o[ky], b_z = p1[kz] - o[kz];
+    const Lanes c_x = p2[kx] - o[kx], c_y = p2[ky] - o[ky], c_z = p2[kz] - o[kz];
+    const Lanes ax = a_x + r.Sx * a_z, ay = a_y + r.Sy * a_z;
+    const Lanes bx = b_x + r.Sx * b_z, by = b_y + r.Sy * b_z;
+    const Lanes cx = c_x + r.Sx * c_z, cy = c_y + r.Sy * c_z;
+    const Lanes e0 = difference_of_products(bx, cy, by, cx);
+    const Lanes e1 = difference_of_products(cx, ay, cy, ax);
+    const Lanes e2 = difference_of_products(ax, by, ay, bx);
+    const Mask outside = ((e0 < 0) | (e1 < 0) | (e2 < 0)) & ((e0 > 0) | (e1 > 0) | (e2 > 0));
+    const Lanes det = e0 + e1 + e2;
+    const Lanes az = r.Sz * a_z, bz = r.Sz * b_z, cz = r.Sz * c_z;
+    const Lanes t_scaled = e0 * az + e1 * bz + e2 * cz;
+    const Lanes lo = min * det, hi = max * det;
+    const Mask out_negative = (det < 0) & ((t_scaled >= lo) | (t_scaled < hi));
+    const Mask out_positive = (det > 0) & ((t_scaled <= lo) | (t_scaled > hi));
+    Mask hit = lanes & ~(outside | (det == 0) | out_negative | out_positive);
+    if (!any(hit)) return hit;
+    const Lanes inv_det = 1 / det;
+    const Lanes t = t_scaled * inv_det;
+    const Mask doubtful = hit & (t <= min + triangle_t_error({ax, ay, az}, {bx, by, bz},
+                                                             {cx, cy, cz}, e0, e1, e2, inv_det));
+    for (unsigned bits = lane_bits(doubtful); bits != 0; bits &= bits - 1) {
+        const int k = __builtin_ctz(bits);
+        if (!starts_off_the_plane_heading_in(p0, p1, p2, r.lane(k))) hit[k] = 0;
+    }
+    th = {t, e0 * inv_det, e1 * inv_det, e2 * inv_det};
+    return hit;
+    // END SOLUTION
 }
 
 // Each ray's closest hit in `mesh` within (min, max] (max shrinks to it): for the lanes of
@@ -190,8 +245,20 @@ inline Mask triangle_candidates(const Vec3 *v, const MeshRaysL &r, Lanes min, La
             counts.primitive_tests += uint64_t(count(lanes)) * uint64_t(node.count);
             for (int i = node.first; i < node.first + node.count; ++i) {
                 const Vec3 *v = &mesh.leaf_vertices[3 * size_t(i)];
-                Mask maybe = r.shared_axes ? lanes & triangle_candidates(v, r, min, max) : lanes;
-                for (unsigned bits = lane_bits(maybe); bits != 0; bits &= bits - 1) {
+                if (r.shared_axes) { // all lanes at once
+                    TriangleHitL hit;
+                    const Mask hits = intersect_triangle(v[0], v[1], v[2], r, lanes, min, max, hit);
+                    if (!any(hits)) continue;
+                    max = select(hits, hit.t, max);
+                    found |= hits;
+                    for (unsigned bits = lane_bits(hits); bits != 0; bits &= bits - 1) {
+                        const int k = __builtin_ctz(bits);
+                        th[k] = {hit.t[k], hit.b0[k], hit.b1[k], hit.b2[k]};
+                        triangle[k] = mesh.order[size_t(i)];
+                    }
+                    continue;
+                }
+                for (unsigned bits = lane_bits(lanes); bits != 0; bits &= bits - 1) {
                     const int k = __builtin_ctz(bits);
                     TriangleHit hit;
                     if (intersect_triangle(v[0], v[1], v[2], r.lane(k), {min[k], max[k]}, hit)) {
