@@ -75,6 +75,43 @@ def test_power_of_a_packet_is_each_lanes_one_ray_power():
             assert [v.hex() for v in lanes] == [v.hex() for v in one], (x, n)
 
 
+def test_leaving_origins_are_each_lanes_offset_ray_origin():
+    """The packet tracer computes the origin offset_ray_origin() gives a ray leaving on the
+    normal's side once per point and takes it for every such ray, running offset_ray_origin()
+    again only in a packet where a lane leaves on the other side (12_packet.h
+    leaving_origin()). No canonical scene has a lane that leaves on the other side (a shadow ray
+    goes only where N.L > 0, a mirror ray where d.N < 0), and a lane that did would move its
+    origin by an ulp, which the float image would not show; so this compares the origins
+    themselves: packets of lanes on both sides, on the plane (toward.N = 0) and at points of
+    every size, against one-ray calls, bit for bit. (With the other side's lanes given the
+    normal's side's origin, or every lane the other side's, this test failed.)"""
+    import random
+
+    rng = random.Random(8)
+    sides = {"front": 0, "back": 0, "plane": 0}
+    for _ in range(300):
+        p, err, n, toward = [], [], [], []
+        for _ in range(8):
+            scale = 10.0 ** rng.uniform(-3, 3)
+            pk = [rng.uniform(-1, 1) * scale for _ in range(3)]
+            nk = [rng.gauss(0, 1) for _ in range(3)]
+            norm = sum(c * c for c in nk) ** 0.5
+            nk = [c / norm for c in nk]
+            tk = [rng.gauss(0, 1) for _ in range(3)]
+            if rng.random() < 0.2:  # along the plane: toward.N = 0 exactly (N along an axis)
+                nk, tk = [0.0, 0.0, 1.0], [tk[0], tk[1], 0.0]
+            side = sum(a * b for a, b in zip(tk, nk, strict=True))
+            sides["plane" if side == 0 else "back" if side < 0 else "front"] += 1
+            p.append(pk), n.append(nk), toward.append(tk)
+            err.append([abs(c) * 1e-15 for c in pk])
+        lanes = tracer._core.leaving_origins(p, err, n, toward)
+        one = [
+            tracer._core.offset_ray_origin(*args) for args in zip(p, err, n, toward, strict=True)
+        ]
+        assert [[c.hex() for c in o] for o in lanes] == [[c.hex() for c in o] for o in one]
+    assert min(sides.values()) > 100, sides
+
+
 @pytest.mark.parametrize("path", OTHER_SCENES, ids=[p.stem for p in OTHER_SCENES])
 def test_packets_fall_back_to_single_rays_for_other_objects(path):
     """Boxes, triangles, meshes, cylinders and tori are traced one ray at a time, and the

@@ -497,6 +497,31 @@ NB_MODULE(_core, m) {
         "power() for a packet's 8 lanes at once, as the packet tracer computes it (12_packet.h).");
 
     m.def(
+        "leaving_origins",
+        [](std::array<Triple, rt::rays_per_packet> p, std::array<Triple, rt::rays_per_packet> p_error,
+           std::array<Triple, rt::rays_per_packet> normal,
+           std::array<Triple, rt::rays_per_packet> toward) {
+            auto lanes = [](const std::array<Triple, rt::rays_per_packet> &v) {
+                rt::Vec3L l;
+                for (int k = 0; k < rt::rays_per_packet; ++k) {
+                    const Triple &t = v[size_t(k)];
+                    l.x[k] = t[0], l.y[k] = t[1], l.z[k] = t[2];
+                }
+                return l;
+            };
+            const rt::Vec3L pl = lanes(p), el = lanes(p_error), nl = lanes(normal);
+            const rt::Vec3L away = rt::offset_ray_origin(pl, el, nl, nl);
+            const rt::Vec3L o =
+                rt::leaving_origin(pl, el, nl, away, lanes(toward), rt::mask_all(true));
+            std::array<Triple, rt::rays_per_packet> out;
+            for (int k = 0; k < rt::rays_per_packet; ++k)
+                out[size_t(k)] = {o.x[k], o.y[k], o.z[k]};
+            return out;
+        },
+        "p"_a, "p_error"_a, "normal"_a, "toward"_a,
+        "The origins of a packet's rays leaving points p (error bounds p_error) on the side of "
+        "`toward`, as the packet tracer computes them (12_packet.h leaving_origin()).");
+    m.def(
         "offset_ray_origin",
         [](Triple p, Triple p_error, Triple normal, Triple toward) {
             return triple(rt::offset_ray_origin(vec(p), vec(p_error), vec(normal), vec(toward)));
