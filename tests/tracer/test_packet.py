@@ -22,6 +22,7 @@ from tests.helpers import (
     scene_dict,
     sphere,
 )
+from tracer import _core
 
 CLASSIC = classic_scenes()
 
@@ -70,8 +71,8 @@ def test_power_of_a_packet_is_each_lanes_one_ray_power():
     for _ in range(200):
         for n in kinds:
             x = [rng.choice([rng.random(), 1 - rng.random() * 1e-6, 1.0]) for _ in n]
-            lanes = tracer._core.power_lanes(x, n)
-            one = [tracer._core.power(xi, ni) for xi, ni in zip(x, n, strict=True)]
+            lanes = _core.power_lanes(x, n)
+            one = [_core.power(xi, ni) for xi, ni in zip(x, n, strict=True)]
             assert [v.hex() for v in lanes] == [v.hex() for v in one], (x, n)
 
 
@@ -104,10 +105,8 @@ def test_leaving_origins_are_each_lanes_offset_ray_origin():
             sides["plane" if side == 0 else "back" if side < 0 else "front"] += 1
             p.append(pk), n.append(nk), toward.append(tk)
             err.append([abs(c) * 1e-15 for c in pk])
-        lanes = tracer._core.leaving_origins(p, err, n, toward)
-        one = [
-            tracer._core.offset_ray_origin(*args) for args in zip(p, err, n, toward, strict=True)
-        ]
+        lanes = _core.leaving_origins(p, err, n, toward)
+        one = [_core.offset_ray_origin(*args) for args in zip(p, err, n, toward, strict=True)]
         assert [[c.hex() for c in o] for o in lanes] == [[c.hex() for c in o] for o in one]
     assert min(sides.values()) > 100, sides
 
