@@ -170,17 +170,27 @@ inline M4 slab_test(const WideNode &node, const SlabRay &r, const Interval &rang
     // END SOLUTION
 }
 
+// What the first steps of intersect_triangle() compute, lane by lane: the sheared vertices
+// (a, b, c: x, y and the scaled z), the edge functions, det and t_scaled, and `candidates`, the
+// lanes that get past the inside test, det != 0 and the range test.
+template <class V, class M> struct Sheared {
+    V ax, ay, az, bx, by, bz, cx, cy, cz, e0, e1, e2, det, t_scaled;
+    M candidates;
+};
+
 // The first steps of intersect_triangle() (15_triangle.h) lane by lane: shear, edge functions,
 // the inside test, det != 0 and the range test, the same operations in the same order, so a
-// lane is true exactly where intersect_triangle() gets past them. Only those go on to the rest
-// of the test (the t-error guard), in intersect_triangle() itself. The lanes are four triangles
-// and one ray (p0, p1, p2 vectors of lanes, o and S doubles); 22_mesh_packets.h carries the
-// whole test over one triangle and a packet of rays.
-// M, the mask type, is named by the caller: a student's tree replaces the body with a stub, from
-// which no return type could be deduced.
-template <class M, class P, class O, class S, class R>
-inline M sheared_candidates(const P &p0, const P &p1, const P &p2, const O &o, int kx, int ky,
-                            int kz, S Sx, S Sy, S Sz, R min, R max) {
+// lane is a candidate exactly where intersect_triangle() gets past them. Lanes are either four
+// triangles and one ray (below: p0, p1, p2 vectors of lanes, o and S doubles), whose candidates
+// go on to the rest of the test in intersect_triangle() itself, or one triangle and a packet of
+// rays (22_mesh_packets.h: p0, p1, p2 doubles, o and S vectors of lanes), which carries the
+// rest of the test over the lanes from these values.
+// V and M, the value and mask types, are named by the caller: a student's tree replaces the
+// body with a stub, from which no return type could be deduced.
+template <class V, class M, class P, class O, class S, class R>
+inline Sheared<V, M> sheared_candidates(const P &p0, const P &p1, const P &p2, const O &o,
+                                        int kx, int ky, int kz, S Sx, S Sy, S Sz, R min,
+                                        R max) {
     // BEGIN SOLUTION L08
     // PROMPT: A copy, lane by lane, of intersect_triangle()'s shear, edge functions and range
     // PROMPT: test, for the four triangles of a block or for a packet of rays.
@@ -200,15 +210,17 @@ inline M sheared_candidates(const P &p0, const P &p1, const P &p2, const O &o, i
     auto lo = min * det, hi = max * det;
     auto out_negative = (det < 0) & ((t_scaled >= lo) | (t_scaled < hi));
     auto out_positive = (det > 0) & ((t_scaled <= lo) | (t_scaled > hi));
-    return ~(outside | (det == 0) | out_negative | out_positive);
+    return {ax, ay, az, bx, by, bz, cx, cy, cz, e0, e1, e2, det, t_scaled,
+            ~(outside | (det == 0) | out_negative | out_positive)};
     // END SOLUTION
 }
 
 // sheared_candidates() for a block's four triangles and one ray.
 inline M4 triangle_candidates(const TriangleBlock &block, const WatertightRay &r,
                               const Interval &range) {
-    return sheared_candidates<M4>(block.p[0], block.p[1], block.p[2], r.o, r.kx, r.ky, r.kz,
-                                  r.Sx, r.Sy, r.Sz, range.min, range.max);
+    return sheared_candidates<D4, M4>(block.p[0], block.p[1], block.p[2], r.o, r.kx, r.ky,
+                                      r.kz, r.Sx, r.Sy, r.Sz, range.min, range.max)
+        .candidates;
 }
 
 // -- The eight-wide hierarchy (issue 12) -------------------------------------------------------
@@ -445,8 +457,9 @@ inline bool block_hits(const IndexBlock &block, const float *vertices, const Mes
                        int &best_triangle, uint64_t &primitive_tests, bool any) {
     const CornerLanes p0(vertices, block.corner[0]), p1(vertices, block.corner[1]),
         p2(vertices, block.corner[2]);
-    const M4 candidates = sheared_candidates<M4>(p0, p1, p2, wr.o, wr.kx, wr.ky, wr.kz, wr.Sx,
-                                                 wr.Sy, wr.Sz, range.min, range.max);
+    const M4 candidates = sheared_candidates<D4, M4>(p0, p1, p2, wr.o, wr.kx, wr.ky, wr.kz,
+                                                     wr.Sx, wr.Sy, wr.Sz, range.min, range.max)
+                              .candidates;
     return candidates_hit(
         candidates, (1u << (block.lanes_more & 7u)) - 1,
         [&](int k, int l) -> Vec3 {

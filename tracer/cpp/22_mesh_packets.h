@@ -7,11 +7,12 @@
 // own range, so a ray sees a few boxes more than its own search would, never fewer.
 //
 // Each ray's answer is its own search's: the box test is slab_test()'s arithmetic lane by lane
-// (a lane's decision is the one-ray decision), and a triangle is accepted by intersect_triangle()'s
-// arithmetic lane by lane too, for each ray with that ray's range, in leaf order (or by
-// intersect_triangle() itself, a ray at a time, where the rays' sheared axes differ). What may differ
-// is the order in which leaves are reached, and so which of two triangles hit at exactly the
-// same t (an edge they share) is kept, as with the wide hierarchy (21_wide_bvh.h);
+// (a lane's decision is the one-ray decision), and a triangle is accepted by
+// intersect_triangle()'s arithmetic lane by lane too, for each ray with that ray's range, in
+// leaf order (or by intersect_triangle() itself, a ray at a time, where the rays' sheared axes
+// differ). What may differ is the order in which leaves are reached, and so which of two
+// triangles hit at exactly the same t (an edge they share) is kept, as with the wide hierarchy
+// (21_wide_bvh.h);
 // tests/tracer/test_mesh_packets.py renders every mesh scene both ways.
 //
 // It serves the aov integrator's primary rays in scenes of meshes only (mesh_packets_serve());
@@ -176,45 +177,32 @@ struct TriangleHitL {
 };
 
 // 15_triangle.h intersect_triangle() for one triangle and the rays of `lanes` (which share kx,
-// ky, kz: MeshRaysL::shared_axes), all lanes at once: the same operations in the same order, so
-// a lane is true exactly where intersect_triangle() returns true for that ray and range, and
-// there th's lanes are its t and barycentric coordinates (elsewhere they mean nothing). The rare lane whose hit is within
-// the error of t of range.min asks starts_off_the_plane_heading_in() on its own. A primary ray
-// meets a bunny's triangle in a few lanes of eight: one call per such lane, each shearing the
-// triangle again, cost more than this test in all eight (perf, issue 12).
+// ky, kz: MeshRaysL::shared_axes), all lanes at once: its first steps are 21_wide_bvh.h
+// sheared_candidates(), the rest the same operations in the same order, so a lane is true
+// exactly where intersect_triangle() returns true for that ray and range, and there th's lanes
+// are its t and barycentric coordinates (elsewhere they mean nothing). The rare lane whose hit
+// is within the error of t of range.min asks starts_off_the_plane_heading_in() on its own. A
+// primary ray meets a bunny's triangle in a few lanes of eight: one call per such lane, each
+// shearing the triangle again, cost more than this test in all eight (perf, issue 12).
 inline Mask intersect_triangle(const Vec3 &p0, const Vec3 &p1, const Vec3 &p2, const MeshRaysL &r,
                                Mask lanes, Lanes min, Lanes max, TriangleHitL &th) {
     // BEGIN SOLUTION L08
     // PROMPT: A copy, lane by lane, of intersect_triangle() for a packet of rays.
     const Lanes o[3] = {r.o.x, r.o.y, r.o.z};
-    const int kx = r.kx, ky = r.ky, kz = r.kz;
-    const Lanes a_x = p0[kx] - o[kx], a_y = p0[ky] - o[ky], a_z = p0[kz] - o[kz];
-    const Lanes b_x = p1[kx] - o[kx], b_y = p1[ky] - o[ky], b_z = p1[kz] - o[kz];
-    const Lanes c_x = p2[kx] - o[kx], c_y = p2[ky] - o[ky], c_z = p2[kz] - o[kz];
-    const Lanes ax = a_x + r.Sx * a_z, ay = a_y + r.Sy * a_z;
-    const Lanes bx = b_x + r.Sx * b_z, by = b_y + r.Sy * b_z;
-    const Lanes cx = c_x + r.Sx * c_z, cy = c_y + r.Sy * c_z;
-    const Lanes e0 = difference_of_products(bx, cy, by, cx);
-    const Lanes e1 = difference_of_products(cx, ay, cy, ax);
-    const Lanes e2 = difference_of_products(ax, by, ay, bx);
-    const Mask outside = ((e0 < 0) | (e1 < 0) | (e2 < 0)) & ((e0 > 0) | (e1 > 0) | (e2 > 0));
-    const Lanes det = e0 + e1 + e2;
-    const Lanes az = r.Sz * a_z, bz = r.Sz * b_z, cz = r.Sz * c_z;
-    const Lanes t_scaled = e0 * az + e1 * bz + e2 * cz;
-    const Lanes lo = min * det, hi = max * det;
-    const Mask out_negative = (det < 0) & ((t_scaled >= lo) | (t_scaled < hi));
-    const Mask out_positive = (det > 0) & ((t_scaled <= lo) | (t_scaled > hi));
-    Mask hit = lanes & ~(outside | (det == 0) | out_negative | out_positive);
+    const Sheared<Lanes, Mask> s = sheared_candidates<Lanes, Mask>(
+        p0, p1, p2, o, r.kx, r.ky, r.kz, r.Sx, r.Sy, r.Sz, min, max);
+    Mask hit = lanes & s.candidates;
     if (!any(hit)) return hit;
-    const Lanes inv_det = 1 / det;
-    const Lanes t = t_scaled * inv_det;
-    const Mask doubtful = hit & (t <= min + triangle_t_error({ax, ay, az}, {bx, by, bz},
-                                                             {cx, cy, cz}, e0, e1, e2, inv_det));
+    const Lanes inv_det = 1 / s.det;
+    const Lanes t = s.t_scaled * inv_det;
+    const Mask doubtful =
+        hit & (t <= min + triangle_t_error({s.ax, s.ay, s.az}, {s.bx, s.by, s.bz},
+                                           {s.cx, s.cy, s.cz}, s.e0, s.e1, s.e2, inv_det));
     for (unsigned bits = lane_bits(doubtful); bits != 0; bits &= bits - 1) {
         const int k = __builtin_ctz(bits);
         if (!starts_off_the_plane_heading_in(p0, p1, p2, r.lane(k))) hit[k] = 0;
     }
-    th = {t, e0 * inv_det, e1 * inv_det, e2 * inv_det};
+    th = {t, s.e0 * inv_det, s.e1 * inv_det, s.e2 * inv_det};
     return hit;
     // END SOLUTION
 }

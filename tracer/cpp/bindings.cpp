@@ -498,7 +498,8 @@ NB_MODULE(_core, m) {
 
     m.def(
         "leaving_origins",
-        [](std::array<Triple, rt::rays_per_packet> p, std::array<Triple, rt::rays_per_packet> p_error,
+        [](std::array<Triple, rt::rays_per_packet> p,
+           std::array<Triple, rt::rays_per_packet> p_error,
            std::array<Triple, rt::rays_per_packet> normal,
            std::array<Triple, rt::rays_per_packet> toward) {
             auto lanes = [](const std::array<Triple, rt::rays_per_packet> &v) {
