@@ -100,7 +100,13 @@ def rtlab(page):
 def test_frames_arrive_with_their_figures(page, server):
     got = rtlab(page)
     assert got["header"]["width"] == 96 and got["header"]["height"] == 64
-    assert page.eval_on_selector("#frame", "e => e.naturalWidth") == 96
+    # Waited for, not read once: passes keep arriving after the first frame, and while the next
+    # one's blob loads Chromium reports naturalWidth 0 (CI saw 0 once, stop 29; sampled on every
+    # animation frame, 0 showed in 20 of ~930 samples over ten page loads). Once the passes end
+    # it stays 96, so a width of 96 must show up within the timeout.
+    page.wait_for_function(
+        "document.querySelector('#frame').naturalWidth === 96", timeout=TIMEOUT_MS
+    )
     page.wait_for_function("document.querySelector('#s-fps').textContent !== '-'")
     for cell in ("#s-render", "#s-encode", "#s-e2e", "#s-rays", "#s-spp"):
         assert page.text_content(cell) != "-", cell
