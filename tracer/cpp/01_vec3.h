@@ -6,6 +6,8 @@
 #pragma once
 
 #include <cmath>
+#include <cstddef>
+#include <cstring>
 
 namespace rt {
 
@@ -15,9 +17,18 @@ struct Vec3 {
     Vec3() = default;
     constexpr Vec3(double x_, double y_, double z_) : x(x_), y(y_), z(z_) {}
 
-    // Component i: x, y, z are laid out like an array (a standard-layout struct of three
-    // doubles), so this is one load, not two comparisons (the triangle test indexes by axis).
-    double operator[](int i) const { return (&x)[i]; }
+    // Component i (0: x, 1: y, 2: z), read from the struct's bytes at i doubles from its start:
+    // one load, not two comparisons (the triangle test indexes by axis). Not (&x)[i]: a pointer
+    // to x points to one double, not into an array of three, so stepping it to y is undefined
+    // behaviour, and Clang 19 compiled the triangle test into one that returned NaN for t (every
+    // mesh test failed; GCC happened to do what was meant, and no sanitizer reports it). Bytes
+    // of an object may be read through unsigned char, and the layout is checked below.
+    double operator[](int i) const {
+        double v;
+        std::memcpy(&v, reinterpret_cast<const unsigned char *>(this) + sizeof(double) * i,
+                    sizeof v);
+        return v;
+    }
     Vec3 operator-() const { return {-x, -y, -z}; }
     Vec3 operator+(const Vec3 &v) const { return {x + v.x, y + v.y, z + v.z}; }
     Vec3 operator-(const Vec3 &v) const { return {x - v.x, y - v.y, z - v.z}; }
@@ -29,6 +40,10 @@ struct Vec3 {
         return {x * inv, y * inv, z * inv};
     }
 };
+// operator[]'s reading of component i at i doubles from the start.
+static_assert(offsetof(Vec3, x) == 0 && offsetof(Vec3, y) == sizeof(double) &&
+                  offsetof(Vec3, z) == 2 * sizeof(double),
+              "Vec3 is three doubles side by side");
 
 inline Vec3 operator*(double s, const Vec3 &v) { return v * s; }
 inline double dot(const Vec3 &a, const Vec3 &b) { return a.x * b.x + a.y * b.y + a.z * b.z; }

@@ -526,10 +526,12 @@ inline U8 float_bits_down(D8 t) {
 template <int k, int j> inline K8 bitonic_layer(K8 v) {
     // Lane i's partner is i ^ j; in a block of k lanes that sorts descending (i & k == 0) the
     // lower lane takes the larger key, in one that sorts ascending the smaller.
-    const K8 partner = {0 ^ j, 1 ^ j, 2 ^ j, 3 ^ j, 4 ^ j, 5 ^ j, 6 ^ j, 7 ^ j};
+    // (__builtin_shufflevector: GCC 12 and Clang both have it; GCC's __builtin_shuffle is
+    // GCC's alone.)
     M8 larger;
     for (int i = 0; i < 8; ++i) larger[i] = ((i & j) == 0) == ((i & k) == 0) ? -1 : 0;
-    const K8 p = __builtin_shuffle(v, partner);
+    const K8 p = __builtin_shufflevector(v, v, 0 ^ j, 1 ^ j, 2 ^ j, 3 ^ j, 4 ^ j, 5 ^ j, 6 ^ j,
+                                         7 ^ j);
     const K8 hi = v > p ? v : p, lo = v > p ? p : v;
     return larger ? hi : lo;
 }
