@@ -154,7 +154,14 @@ def test_edits_to_the_scene_file_show_and_a_broken_one_keeps_the_last_image(page
         edited = rtlab(page)
         assert edited["hash"] != before["hash"]
         scene_file.write_text(text.replace("shininess = 60.0", "shinyness = 60.0", 1))
-        page.wait_for_selector("#error:not([hidden])", timeout=TIMEOUT_MS)
+        # write_text() empties the file before it writes it, as many editors save, and the
+        # viewer may read it in between: it then shows that file's error (no [camera]) until it
+        # reads the whole file. So wait for the misspelt key's error, not for the first error.
+        page.wait_for_function(
+            "!document.querySelector('#error').hidden"
+            " && document.querySelector('#error').textContent.includes('shinyness')",
+            timeout=TIMEOUT_MS,
+        )
         shown = page.text_content("#error")
         assert str(scene_file) in shown and "materials.red" in shown and "shininess" in shown
         kept = rtlab(page)
