@@ -8,8 +8,10 @@ PY := $(VENV)/bin/python
 # System packages: POV-Ray is a reference renderer; libLLVM 19 runs Mitsuba's llvm_ad_rgb
 # variant (Debian 12's default libLLVM 15 aborts in it); OSMesa lets pyrender rasterise offscreen;
 # Chromium (/usr/bin/chromium) is the browser the tests of `rtlab report`'s pages drive with
-# Playwright (whose own `playwright install` downloads a browser, which cannot work offline).
-APT_PACKAGES := povray libllvm19 libosmesa6 chromium
+# Playwright (whose own `playwright install` downloads a browser, which cannot work offline);
+# Clang builds the core a second time for tests/test_second_compiler.py (undefined behaviour that
+# GCC lets pass, Clang may not).
+APT_PACKAGES := povray libllvm19 libosmesa6 chromium clang
 CPP_SOURCES := CMakeLists.txt pyproject.toml $(wildcard tracer/cpp/*.h tracer/cpp/*.cpp)
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
@@ -30,7 +32,7 @@ system:
 	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq $$missing >/dev/null || \
 	  { echo "make: apt-get could not install:$$missing" >&2; exit 1; }; \
 	fi; \
-	for tool in povray chromium; do command -v $$tool >/dev/null 2>&1 || \
+	for tool in povray chromium clang++; do command -v $$tool >/dev/null 2>&1 || \
 	  { echo "make: $$tool is not on PATH after installing its package; the tests need it" >&2; exit 1; }; \
 	done; \
 	$(PYTHON) -c 'import sys; sys.exit(sys.version_info < (3, 11))' || \

@@ -465,6 +465,9 @@ NB_MODULE(_core, m) {
 #else
     m.attr("sanitized") = false;
 #endif
+    // The compiler that built this core, as it names itself (GCC: "12.2.0", Clang: "Debian
+    // Clang 14.0.6"): tests/test_second_compiler.py checks it is testing Clang's build.
+    m.attr("compiler") = __VERSION__;
 
     m.def(
         "intersect_sphere",
