@@ -378,12 +378,16 @@ inline Vec3L reflect(const Vec3L &d, const Vec3L &N) {
 // offset_ray_origin() depends on the direction the ray leaves in only through the side of Ng
 // it leaves on (its select on dot(toward, N) < 0). A point's reflected ray and its shadow rays
 // to the lights it faces all leave on Ng's side, so that origin is computed once a level
-// (`away`, offset_ray_origin(p, p_error, Ng, Ng): dot(Ng, Ng) < 0 is never true, as for any
-// ray leaving on Ng's side or along its plane) and each ray takes it; offset_ray_origin() runs
-// again only for a packet in which one of `lanes` leaves on the other side. Once a level
-// instead of three times: Ex 25 1.06x on 1 and 2 threads, the same bits (paired A/B, issue 12).
-// The binding leaving_origins is tested lane by lane against the one-ray offset_ray_origin()
-// (tests/tracer/test_packet.py).
+// (`away`, away_origin(): offset_ray_origin(p, p_error, Ng, Ng), since dot(Ng, Ng) < 0 is never
+// true, as for any ray leaving on Ng's side or along its plane) and each ray takes it;
+// offset_ray_origin() runs again only for a packet in which one of `lanes` leaves on the other
+// side (leaving_origin()). Once a level instead of three times: Ex 25 1.06x on 1 and 2
+// threads, the same bits (paired A/B, issue 12). The binding leaving_origins, which calls both,
+// is tested lane by lane against the one-ray offset_ray_origin() (tests/tracer/test_packet.py).
+inline Vec3L away_origin(const Vec3L &p, const Vec3L &p_error, const Vec3L &Ng) {
+    return offset_ray_origin(p, p_error, Ng, Ng);
+}
+
 inline Vec3L leaving_origin(const Vec3L &p, const Vec3L &p_error, const Vec3L &Ng,
                             const Vec3L &away, const Vec3L &toward, Mask lanes) {
     const Mask back = dot(toward, Ng) < 0;
@@ -483,7 +487,7 @@ inline Mask trace_level(const Scene &scene, RayL &ray, Mask active, Lanes &coef,
     }
     const FacingL f = face_the_ray(hit, ray.d); // the side we see is the side we shade
     const Vec3L &N = f.N;
-    const Vec3L away = offset_ray_origin(hit.p, hit.p_error, f.Ng, f.Ng); // leaving_origin()
+    const Vec3L away = away_origin(hit.p, hit.p_error, f.Ng); // leaving_origin()
     Vec3L R = reflect(ray.d, N);
 
     // local_color()

@@ -514,9 +514,8 @@ NB_MODULE(_core, m) {
                 return l;
             };
             const rt::Vec3L pl = lanes(p), el = lanes(p_error), nl = lanes(normal);
-            const rt::Vec3L away = rt::offset_ray_origin(pl, el, nl, nl);
-            const rt::Vec3L o =
-                rt::leaving_origin(pl, el, nl, away, lanes(toward), rt::mask_all(true));
+            const rt::Vec3L o = rt::leaving_origin(pl, el, nl, rt::away_origin(pl, el, nl),
+                                                   lanes(toward), rt::mask_all(true));
             std::array<Triple, rt::rays_per_packet> out;
             for (int k = 0; k < rt::rays_per_packet; ++k)
                 out[size_t(k)] = {o.x[k], o.y[k], o.z[k]};
