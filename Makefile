@@ -76,7 +76,8 @@ test: setup lint
 
 # The core built with AddressSanitizer and UndefinedBehaviorSanitizer (CMake's RTLAB_SANITIZE,
 # in build/sanitize: .venv's own build is left alone), then the tests that exercise the core
-# (tests/tracer) run against it, in one process that loads it as tracer._core. The sanitizer's
+# (tests/tracer) run against it, in one process that loads it as tracer._core
+# (tests/with_core.py, which tests/test_second_compiler.py uses too). The sanitizer's
 # runtime must be the process's first library, hence LD_PRELOAD (dropped again for the
 # processes the tests start, which run the ordinary build). libstdc++ is preloaded with it: the
 # runtime wraps __cxa_throw when it starts, and a C++ exception thrown later (nanobind
@@ -85,15 +86,8 @@ test: setup lint
 # run with an error, and --capture=sys lets it reach the terminal. Deselected: the demo verb, which runs POV-Ray and
 # Mitsuba (their JIT and runtimes are not ours to check).
 SANITIZE_DIR := build/sanitize
-SANITIZE_PYTEST := "-q", "--capture=sys", "-p", "no:cacheprovider", "-p", "no:xdist", \
-  "--deselect", "tests/tracer/test_cli_and_io.py::test_check_and_demo_verbs", "tests/tracer"
-SANITIZE_RUN := import glob, importlib.util, os, sys; \
-  os.environ.pop("LD_PRELOAD"); \
-  spec = importlib.util.spec_from_file_location("tracer._core", glob.glob("$(SANITIZE_DIR)/_core.*.so")[0]); \
-  core = importlib.util.module_from_spec(spec); sys.modules["tracer._core"] = core; \
-  spec.loader.exec_module(core); \
-  assert core.sanitized, "not the sanitized build"; \
-  import pytest; sys.exit(pytest.main([$(SANITIZE_PYTEST)]))
+SANITIZE_PYTEST := -q --capture=sys -p no:cacheprovider -p no:xdist \
+  --deselect tests/tracer/test_cli_and_io.py::test_check_and_demo_verbs tests/tracer
 
 sanitize: setup
 	$(VENV)/bin/cmake -S . -B $(SANITIZE_DIR) -G Ninja -DCMAKE_MAKE_PROGRAM=$(abspath $(VENV)/bin/ninja) \
@@ -102,7 +96,8 @@ sanitize: setup
 	$(VENV)/bin/cmake --build $(SANITIZE_DIR)
 	LD_PRELOAD="$$(c++ -print-file-name=libasan.so) $$(c++ -print-file-name=libstdc++.so)" \
 	  ASAN_OPTIONS=detect_leaks=0 \
-	  UBSAN_OPTIONS=print_stacktrace=1 $(PY) -c '$(SANITIZE_RUN)'
+	  UBSAN_OPTIONS=print_stacktrace=1 $(PY) -m tests.with_core $(SANITIZE_DIR)/_core.*.so sanitized \
+	  $(SANITIZE_PYTEST)
 
 clean:
 	rm -rf build out $(VENV) .pytest_cache .ruff_cache

@@ -3,12 +3,13 @@ build does. GCC is the compiler `make` uses; code whose behaviour the standard l
 can still do what was meant under GCC and something else under Clang, and neither the tests
 nor the sanitizers (`make sanitize`) notice. It happened: Vec3::operator[] read component i as
 (&x)[i], and Debian's Clang 14 (and Clang 19) compiled the triangle test into one that returned
-t = NaN, so every mesh went unseen (17 tests of tests/tracer failed under Clang).
+t = NaN, so every mesh went unseen (103 tests of tests/tracer failed under Clang).
 
 The build goes to build/clang (ninja rebuilds only what changed), and the tests run in a child
-process that loads it as tracer._core, as `make sanitize` loads its build. Left out there: the
-browser tests and the demo verb, which start processes of their own (those run the .venv build,
-not this one), and nothing of the core is in them that the other tests do not reach."""
+process that loads it as tracer._core (tests/with_core.py, as `make sanitize` loads its build).
+Left out there: the browser tests and the demo verb, which start processes of their own (those
+run the .venv build, not this one), and nothing of the core is in them that the other tests do
+not reach."""
 
 import glob
 import os
@@ -20,17 +21,6 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 BUILD = ROOT / "build" / "clang"
 VENV_BIN = Path(sys.executable).parent
-
-LOAD_AND_TEST = """
-import importlib.util, sys
-spec = importlib.util.spec_from_file_location("tracer._core", sys.argv[1])
-core = importlib.util.module_from_spec(spec)
-sys.modules["tracer._core"] = core
-spec.loader.exec_module(core)
-assert "clang" in core.compiler.lower(), f"not Clang's build: {core.compiler}"
-import pytest
-sys.exit(pytest.main(sys.argv[2:]))
-"""
 
 
 def test_the_core_built_by_clang_passes_the_core_tests():
@@ -81,7 +71,7 @@ def test_the_core_built_by_clang_passes_the_core_tests():
         "tests/tracer",
     ]
     run = subprocess.run(
-        [sys.executable, "-c", LOAD_AND_TEST, so, *tests],
+        [sys.executable, "-m", "tests.with_core", so, "clang", *tests],
         cwd=ROOT,
         capture_output=True,
         text=True,

@@ -1,0 +1,39 @@
+"""Run pytest against another build of the core, loaded as tracer._core before anything imports
+tracer: `make sanitize`'s AddressSanitizer build, tests/test_second_compiler.py's Clang build.
+
+    python -m tests.with_core CORE.so {sanitized,clang} [pytest arguments]
+
+The second argument names the build expected, and a core that is not it stops the run: a test of
+the wrong build would pass for the wrong reason. LD_PRELOAD (the sanitizer's runtime, which must
+be this process's first library) is dropped for the processes the tests start: they run the
+ordinary .venv build."""
+
+import importlib.util
+import os
+import sys
+
+EXPECTED = {
+    "sanitized": lambda core: core.sanitized,
+    "clang": lambda core: "clang" in core.compiler.lower(),
+}
+
+
+def main(argv: list[str]) -> int:
+    if len(argv) < 2 or argv[1] not in EXPECTED:
+        raise SystemExit(f"usage: python -m tests.with_core CORE.so {{{','.join(EXPECTED)}}} ...")
+    path, expected, *pytest_args = argv
+    os.environ.pop("LD_PRELOAD", None)
+    spec = importlib.util.spec_from_file_location("tracer._core", path)
+    assert spec is not None and spec.loader is not None, f"{path}: not a Python extension"
+    core = importlib.util.module_from_spec(spec)
+    sys.modules["tracer._core"] = core
+    spec.loader.exec_module(core)
+    if not EXPECTED[expected](core):
+        raise SystemExit(f"{path}: not the {expected} build (compiler {core.compiler})")
+    import pytest
+
+    return int(pytest.main(pytest_args))
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
