@@ -161,6 +161,13 @@ def run_limited(command: list[str], cwd: Path, limits: Limits, what: str) -> Out
         timed_out = True
         _kill_group(process)
         process.wait()
+    except BaseException:
+        # Interrupted (Ctrl-C, SIGTERM turned into an exception by the caller): the child is in
+        # a session of its own, so the terminal's SIGINT never reached it; without this it ran on
+        # to its CPU limit after the grader had gone.
+        _kill_group(process)
+        process.wait()
+        raise
     _kill_group(process)  # what it may have left running in its group
     reader.join(timeout=5)
     seconds = time.monotonic() - start

@@ -8,6 +8,11 @@ from __future__ import annotations
 
 import os
 import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
 
 import pytest
 
@@ -99,6 +104,46 @@ def test_a_wall_clock_hang_is_killed(tmp_path):
     assert build.outcome.ok, build.outcome.output
     run = run_probe(build, [], Limits(cpu_s=2, wall_s=1.5))
     assert run.kind == "hang" and "1.5 s wall clock" in run.message
+
+
+# A grader's process that runs a child which sleeps (it writes its pid first, then execs sleep,
+# so the pid is the sleeper's), until the test interrupts it.
+INTERRUPTED = """
+import sys
+from pathlib import Path
+from lessons.sandbox import Limits, run_limited
+pidfile = Path(sys.argv[1])
+command = ["sh", "-c", f"echo $$ > {pidfile}.tmp && mv {pidfile}.tmp {pidfile} && exec sleep 600"]
+try:
+    run_limited(command, pidfile.parent, Limits(cpu_s=600, wall_s=600), "the probe")
+except KeyboardInterrupt:
+    sys.exit(3)
+"""
+
+
+def test_an_interrupted_grader_leaves_no_child_running(tmp_path):
+    """Ctrl-C reaches the grader, not the student's child (a session of its own): the grader
+    must kill the child's group before it gives up, or the child runs on to its limits."""
+    pidfile = tmp_path / "child.pid"
+    grader = subprocess.Popen(
+        [sys.executable, "-c", INTERRUPTED, str(pidfile)], cwd=ROOT, env=os.environ
+    )
+    deadline = time.monotonic() + 30
+    while not pidfile.exists():
+        assert grader.poll() is None, "the grader ended before its child started"
+        assert time.monotonic() < deadline, "the child never wrote its pid"
+        time.sleep(0.05)
+    child = int(pidfile.read_text())
+    os.kill(child, 0)  # the child runs (raises if not): the check below could fail
+    grader.send_signal(signal.SIGINT)
+    assert grader.wait(timeout=30) == 3  # the interrupt came out as KeyboardInterrupt
+    # The grader waits for the child it killed, so it is gone; one left running was handed to
+    # init and is still there (a zombie, "Z", would be a killed one nobody reaped yet).
+    stat = Path(f"/proc/{child}/stat")
+    alive = stat.exists() and stat.read_text().split()[2] != "Z"
+    if alive:
+        os.kill(child, signal.SIGKILL)
+    assert not alive, "the interrupted grader left its child running"
 
 
 def test_a_stub_is_not_implemented(tmp_path):
