@@ -43,6 +43,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from tracer import interrupt
+
 #: What a done file is called when a task names only its output directory.
 DONE = ".rtlab-done.json"
 
@@ -254,6 +256,7 @@ def run_batch(
     try:
         if todo and client is None and (engine is None or engine.serial):
             for task in todo:
+                interrupt.raise_if_interrupted()  # one swallowed on the way (tracer/interrupt.py)
                 outcomes[task.name] = _serial(task, retries, bar)
         elif todo:
             with contextlib.ExitStack() as stack:

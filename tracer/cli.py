@@ -7,6 +7,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from tracer import interrupt
 from tracer.image import ImageFormatError, image_format, save_aov, save_image
 from tracer.render import ImageTooLargeError, aov_channels, render_progressive, render_with_stats
 from tracer.scene import Scene, SceneError, load_scene
@@ -386,48 +387,6 @@ bad input; 130 or 143 when interrupted by SIGINT or SIGTERM."""
 _WRITTEN: list[Path] = []
 
 
-class Interrupted(KeyboardInterrupt):
-    """SIGINT or SIGTERM. Raised by the signal handler, so it travels the path of Ctrl-C: the
-    core's watching thread checks for signals every 100 ms (tracer/cpp/bindings.cpp), cancels
-    the render and re-raises it; every atomic write on the way unwinds (tracer/image.py); a
-    reference renderer's child process is killed by subprocess.run."""
-
-    def __init__(self, signum: int) -> None:
-        super().__init__(signum)
-        self.signum = signum
-
-
-_interrupted = False  # set by the first signal
-
-
-def _on_signal(signum: int, frame: object) -> None:
-    global _interrupted
-    if _interrupted:  # a second signal while the first unwinds: let the clean-up finish
-        return
-    _interrupted = True
-    raise Interrupted(signum)
-
-
-def _signals_interrupt() -> dict[int, object]:
-    """From now on SIGINT and SIGTERM raise Interrupted; returns the handlers they had, for
-    _restore_signals. (Python delivers signals to the main thread only: elsewhere, nothing.)"""
-    import signal
-    import threading
-
-    global _interrupted
-    _interrupted = False
-    if threading.current_thread() is not threading.main_thread():
-        return {}
-    return {s: signal.signal(s, _on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
-
-
-def _restore_signals(previous: dict[int, object]) -> None:
-    import signal
-
-    for s, handler in previous.items():
-        signal.signal(s, handler)  # type: ignore[arg-type]
-
-
 def _interrupted_message(signum: int) -> str:
     import signal
 
@@ -445,9 +404,11 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     args = build_parser().parse_args(argv)
     _WRITTEN.clear()
-    previous = _signals_interrupt()
+    previous = interrupt.install()
     try:
-        return args.func(args) or 0
+        status = args.func(args) or 0
+        interrupt.raise_if_interrupted()  # a signal whose exception was swallowed on the way
+        return status
     except (SceneError, ImageFormatError, ImageTooLargeError, UsageError) as exc:
         print(f"rtlab: error: {exc}", file=sys.stderr)
         return 2
@@ -456,7 +417,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(_interrupted_message(signum), file=sys.stderr)
         return 128 + signum
     finally:
-        _restore_signals(previous)
+        interrupt.restore(previous)
 
 
 if __name__ == "__main__":

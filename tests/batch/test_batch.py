@@ -163,6 +163,42 @@ def test_an_interrupted_batch_run_again_skips_what_finished(tmp_path: Path, subs
     assert all((out / n / "results.json").exists() for n in names)
 
 
+# A serial batch whose first task's interrupt is swallowed: SIGINT raised (raise_signal runs
+# the handler at once) inside a __del__, where Python prints "Exception ignored" and goes on.
+SWALLOWED = """
+import signal
+from tracer import interrupt
+from tracer.batch import Engine, Task, run_batch
+
+class Swallows:
+    def __del__(self):
+        signal.raise_signal(signal.SIGINT)
+
+def first():
+    Swallows()  # collected at once
+    return {}
+
+ran = []
+interrupt.install()
+try:
+    run_batch([Task("first", first), Task("second", lambda: ran.append(1) or {})],
+              Engine(workers=0), progress=False)
+    print("not interrupted")
+except interrupt.Interrupted as exc:
+    print("interrupted by", exc.signum, "; the second task ran" if ran else "; nothing more ran")
+"""
+
+
+def test_an_interrupt_swallowed_by_a_task_still_stops_a_serial_batch() -> None:
+    """The test above failed once in CI's way (the grade exited 0 after SIGINT; not seen again
+    in 63 runs). A signal whose exception is lost in a finaliser is the one way found to get
+    there: it must still stop the batch before its next task (tracer/interrupt.py)."""
+    run = subprocess.run([sys.executable, "-c", SWALLOWED], capture_output=True, text=True,
+                         cwd=Path(__file__).parents[2], timeout=60)  # fmt: skip
+    assert "Exception ignored" in run.stderr, run.stderr  # the interrupt was swallowed once
+    assert run.stdout.strip() == f"interrupted by {int(signal.SIGINT)} ; nothing more ran"
+
+
 ATTEMPTS: list[str] = []
 
 
