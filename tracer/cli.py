@@ -240,6 +240,7 @@ def cmd_view(args: argparse.Namespace) -> int:
     try:
         serve(args.scene, args.host, args.port, not args.no_browser, args.threads)
     except KeyboardInterrupt:  # Ctrl-C is how a viewer stops: not a failure
+        interrupt.handled()
         print("rtlab view: stopped", file=sys.stderr)
     except OSError as exc:  # the port is taken, the address is not this machine's
         raise UsageError(f"view: cannot listen on {args.host}:{args.port}: {exc}") from exc

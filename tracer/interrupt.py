@@ -58,6 +58,13 @@ def pending() -> int | None:
     return _signum
 
 
+def handled() -> None:
+    """The signal received is the way the verb ends (rtlab view stops on Ctrl-C): forgotten, so
+    that main() does not raise it again."""
+    global _signum
+    _signum = None
+
+
 def raise_if_interrupted() -> None:
     """Raise Interrupted again if a signal came since install() (its first raising may have
     been swallowed: see the module's text)."""
