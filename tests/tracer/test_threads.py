@@ -137,3 +137,20 @@ def test_the_convergence_suite_times_the_path_tracer_on_one_and_two_threads():
     assert sorted(r["threads"] for r in rows) == [1, 2]
     assert all(r["value"] > 0 and r["unit"] == "s" for r in rows)
     assert list(thread_scaling(rows)) == [("", "cornell_box-8x8-2spp", "rtlab")]
+
+
+def test_every_tile_is_written_whatever_the_threads():
+    """The workers take runs of tiles (11_render.h); a tile no run covered would keep what the
+    image's memory held before. The core reuses the memory of the last image freed of the same
+    size, so each render below starts from another scene's pixels: a tile left out shows them."""
+    scene = tracer.load_scene(SCENE).with_overrides(width=203, height=157)
+    other = scene.with_overrides(max_depth=1, background=(1.0, 0.0, 1.0))  # another picture
+    expected = tracer.render(scene, threads=1)
+    for threads in (2, 3, 8):
+        stale = tracer.render(other, threads=threads)
+        assert not np.array_equal(stale, expected)  # so a tile left out would show
+        memory = stale.__array_interface__["data"][0]
+        del stale  # its memory is the next render's
+        image = tracer.render(scene, threads=threads)
+        assert image.__array_interface__["data"][0] == memory  # it was: the stale pixels were there
+        assert np.array_equal(image, expected)
