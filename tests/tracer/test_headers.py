@@ -211,3 +211,21 @@ def test_comments_name_functions_that_exist(source):
     assert not missing, f"{source.name}: comments name functions that do not exist: {missing}"
     for header, name in re.findall(r"\b(\d\d_\w+\.h) ([a-z_]\w*)\(\)", text):
         assert name in code_of((CPP / header).read_text()), f"{name}() is not in {header}"
+
+
+# The width ruff holds the Python to (pyproject.toml line-length): a lesson's file is read
+# side by side with its slide, and a student's editor wraps longer lines.
+WIDTH = 100
+
+
+def _long_lines(text: str) -> list[int]:
+    return [n for n, line in enumerate(text.splitlines(), 1) if len(line) > WIDTH]
+
+
+@pytest.mark.parametrize("source", SOURCES, ids=lambda p: p.name)
+def test_lines_fit_the_width(source):
+    assert _long_lines(source.read_text()) == [], f"{source.name}: lines over {WIDTH} columns"
+
+
+def test_the_width_check_can_fail():
+    assert _long_lines("short\n" + "x" * (WIDTH + 1) + "\n" + "y" * WIDTH) == [2]

@@ -60,8 +60,9 @@ inline double sphere_discriminant(const Vec3 &f, const Vec3 &d, double a, double
 // inv_a = 1/a. The textbook (-b -+ sqrt(D)) / a subtracts two nearly equal numbers, -b and
 // sqrt(D), for the root nearer zero when |a c0| << b^2 (a ray that starts just off a sphere, or a
 // sphere far away seen from a point near another): that root loses its digits. The stable form
-// adds only numbers of one sign: q = -(b + sign(b) sqrt(D)), t1 = q / a, and t0 = c0 / q from Vieta's t0 t1 = c0 / a
-// (Press et al., Numerical Recipes, section 5.6; Haines et al. 2019, eq. 7.7).
+// adds only numbers of one sign: q = -(b + sign(b) sqrt(D)), t1 = q / a, and t0 = c0 / q from
+// Vieta's t0 t1 = c0 / a (Press et al., Numerical Recipes, section 5.6; Haines et al. 2019, eq.
+// 7.7).
 inline SphereRoots quadratic_roots(double b, double c0, double D, double inv_a) {
     // BEGIN SOLUTION L13
     // PROMPT: Both roots t0 <= t1 of a t^2 + 2 b t + c0 = 0, given D = b^2 - a c0 >= 0 and

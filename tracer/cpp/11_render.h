@@ -295,9 +295,10 @@ struct RenderResult {
 constexpr int tile_size = 16;
 
 // A small image, where tiles of 16 x 16 would give each thread fewer than tiles_per_thread, is
-// cut finer, into tiles of 8 x 8 (a packet per row still): tiles differ in cost (a tile of sky against one of
-// mirrors), and with few of them per thread one thread is left tracing the last while the
-// others wait. A 64 x 64 image had 16 tiles of 16 x 16 for 2 threads (issue 12); it gets 64.
+// cut finer, into tiles of 8 x 8 (a packet per row still): tiles differ in cost (a tile of sky
+// against one of mirrors), and with few of them per thread one thread is left tracing the last
+// while the others wait. A 64 x 64 image had 16 tiles of 16 x 16 for 2 threads (issue 12); it
+// gets 64.
 constexpr int tiles_per_thread = 16;
 inline int tile_side(int width, int height, int threads) {
     auto tiles = [&](int side) {

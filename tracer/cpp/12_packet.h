@@ -93,7 +93,8 @@ inline Lanes sqrt(Lanes x) {
     static_assert(sizeof(Lanes) == sizeof(__m512d));
     __m512d v;
     std::memcpy(&v, &x, sizeof v);
-    v = _mm512_mask_sqrt_pd(v, __mmask8(0xff), v); // not _mm512_sqrt_pd: GCC 12 warns on its undefined source
+    // Not _mm512_sqrt_pd: GCC 12 warns on its undefined source.
+    v = _mm512_mask_sqrt_pd(v, __mmask8(0xff), v);
     std::memcpy(&x, &v, sizeof v);
     return x;
 #else
@@ -142,7 +143,9 @@ struct ColorL {
     Lanes r, g, b;
 };
 inline ColorL operator*(const ColorL &c, Lanes s) { return {c.r * s, c.g * s, c.b * s}; }
-inline ColorL operator*(const ColorL &a, const ColorL &c) { return {a.r * c.r, a.g * c.g, a.b * c.b}; }
+inline ColorL operator*(const ColorL &a, const ColorL &c) {
+    return {a.r * c.r, a.g * c.g, a.b * c.b};
+}
 inline ColorL splat(const Color &c) { return {splat(c.r), splat(c.g), splat(c.b)}; }
 // color += m ? add : 0, as `color += add` only in the lanes of m.
 inline void add_where(Mask m, ColorL &color, const ColorL &add) {
@@ -212,7 +215,8 @@ inline Mask select(Mask m, Mask a, Mask b) { return m ? a : b; }
 inline ClosestL closest_hit(const Scene &scene, const RayL &ray, Mask active, RayCounts &counts,
                             unsigned skip) {
     ClosestL c{splat(infinity), Mask{} - 1};
-    counts.primitive_tests += uint64_t(count(active)) * (scene.spheres.size() + scene.planes.size());
+    counts.primitive_tests +=
+        uint64_t(count(active)) * (scene.spheres.size() + scene.planes.size());
     const Lanes a = dot(ray.d, ray.d), inv_a = 1 / a;
     int64_t id = 0;
     for (size_t i = 0; i < scene.spheres.size(); ++i, ++id) {
@@ -554,7 +558,8 @@ inline ColorL trace(const Scene &scene, RayL ray, Mask active, RayCounts &counts
 inline RayL primary_rays(const Camera &cam, int i0, int j) {
     // BEGIN SOLUTION L01
     // PROMPT: The packet tracer's copy of 03_camera.h primary_ray(), one ray per lane: not part
-    // PROMPT: of the exercise, hidden until lesson L01 is done (the lessons use the one-ray tracer).
+    // PROMPT: of the exercise, hidden until lesson L01 is done (the lessons use the one-ray
+    // PROMPT: tracer).
     Lanes sx;
     for (int k = 0; k < rays_per_packet; ++k) sx[k] = (i0 + k) + 0.5;
     Lanes x = sx / double(cam.width) - 0.5;

@@ -158,7 +158,8 @@ struct Box : Object {
         bool entering = c.entering;
         Vec3 p = ray.at(t);
         // The face is known exactly: put the point on it. The other two coordinates carry the
-        // error of o + t d, with t from one subtraction, one multiplication: gamma(5) of their size.
+        // error of o + t d, with t from one subtraction, one multiplication: gamma(5) of their
+        // size.
         double d_axis = ray.d[axis];
         // Entering along +d crosses the min face; leaving along +d, the max face.
         double face = entering == (d_axis > 0) ? box.min[axis] : box.max[axis];

@@ -64,9 +64,9 @@ struct Frame {
 // way". A Lambertian surface sends towards the eye f cos(theta) of the radiance arriving from a
 // direction at angle theta from its normal, f = albedo / pi; a bounce sampled with density
 // proportional to the cosine carries f cos / pdf = albedo, whatever the direction: no sample is
-// wasted on the grazing directions that contribute little. Malley's method (pbrt-v4 section A.5.3, "Cosine-
-// Weighted Hemisphere Sampling"): a point uniform on the unit disk, r = sqrt(u1), phi = 2 pi u2,
-// projected up onto the hemisphere, z = sqrt(1 - r^2), is distributed as cos / pi.
+// wasted on the grazing directions that contribute little. Malley's method (pbrt-v4 section
+// A.5.3, "Cosine-Weighted Hemisphere Sampling"): a point uniform on the unit disk, r = sqrt(u1),
+// phi = 2 pi u2, projected up onto the hemisphere, z = sqrt(1 - r^2), is distributed as cos / pi.
 inline Vec3 sample_cosine(double u1, double u2) {
     // BEGIN SOLUTION L12
     // PROMPT: A direction about +z whose density is cos(theta) / pi (Malley's method): a point
