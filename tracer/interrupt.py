@@ -3,8 +3,8 @@
 The handler raises Interrupted once, wherever the main thread is. Where that is inside a
 ``__del__`` or a weakref finaliser (a subprocess or a temporary directory being collected),
 Python prints "Exception ignored" and goes on: the interrupt would be lost, and a batch would
-run to its end and exit 0. So the signal is also remembered (``pending()``): a batch checks it
-between tasks (``raise_if_interrupted()``, tracer/batch.py) and main() checks it at the end."""
+run to its end and exit 0. So the signal is also remembered: a batch checks it between tasks
+(``raise_if_interrupted()``, tracer/batch.py) and main() checks it at the end."""
 
 from __future__ import annotations
 
@@ -47,15 +47,9 @@ def install() -> dict[int, object]:
 def restore(previous: dict[int, object]) -> None:
     """The handlers install() replaced put back, and the signal forgotten: a library call after
     the verb (a test's, a notebook's) is not interrupted by it."""
-    global _signum
-    _signum = None
+    handled()
     for s, handler in previous.items():
         signal.signal(s, handler)  # type: ignore[arg-type]
-
-
-def pending() -> int | None:
-    """The signal received since install(), if one was (raised or not)."""
-    return _signum
 
 
 def handled() -> None:
