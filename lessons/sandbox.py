@@ -159,16 +159,13 @@ def run_limited(command: list[str], cwd: Path, limits: Limits, what: str) -> Out
         process.wait(timeout=limits.wall_s)
     except subprocess.TimeoutExpired:
         timed_out = True
+    finally:
+        # The group killed whatever ended the wait: a timeout; an interrupt (Ctrl-C, or SIGTERM
+        # turned into an exception by the caller), which never reached the child, in a session
+        # of its own, so that it ran on to its CPU limit after the grader had gone; or the
+        # child's exit, after which what it left running in its group goes too.
         _kill_group(process)
         process.wait()
-    except BaseException:
-        # Interrupted (Ctrl-C, SIGTERM turned into an exception by the caller): the child is in
-        # a session of its own, so the terminal's SIGINT never reached it; without this it ran on
-        # to its CPU limit after the grader had gone.
-        _kill_group(process)
-        process.wait()
-        raise
-    _kill_group(process)  # what it may have left running in its group
     reader.join(timeout=5)
     seconds = time.monotonic() - start
     output = b"".join(chunks).decode("utf-8", errors="replace")
