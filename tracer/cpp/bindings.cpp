@@ -9,8 +9,6 @@
 #include <nanobind/stl/tuple.h>
 #include <nanobind/stl/vector.h>
 
-#include <sys/mman.h>
-
 #include <array>
 #include <cstddef>
 #include <cstdlib>
@@ -123,18 +121,24 @@ static void fill_mesh(rt::Mesh &mesh, const Vertices &vertices, const Faces &fac
         }
 }
 
-// The image's memory. The kernel maps a fresh page only when it is first written, one fault
-// per 4 KiB page: a 1920 x 1024 aov image (5 floats a pixel, 39 MB, above the size whose freed
-// memory the C library keeps for reuse) took 9,600 faults in every render, with the render
-// threads queueing on the lock of the process's memory map. Aligned to 2 MiB and marked
-// MADV_HUGEPAGE (a hint the kernel may ignore; with transparent huge pages in "madvise" mode,
-// as here, the only way to get them), it is mapped in 2 MiB pages: 20 faults.
-//
-// Even so every fresh page is zeroed by the kernel first: 24 MB for Ex 25 at 1920 x 1024, a
-// tenth of its render's time (perf, issue 12). So the last image freed is kept, one block, and
+// The image's memory. The kernel maps a fresh page only when it is first written and zeroes it
+// first: 24 MB for Ex 25 at 1920 x 1024, a tenth of its render's time, and a 1920 x 1024 aov
+// image (5 floats a pixel, 39 MB) took 9,600 faults, the render threads queueing on the lock of
+// the process's memory map (perf, issue 12). So the last image freed is kept, one block, and
 // the next render of the same size (a benchmark's repeats, a progressive render's passes, a
 // viewer's frames) writes into it instead: every pixel is written, so what it held does not
 // matter. A render of another size frees it. At most one image's memory stays held.
+//
+// The block is aligned to 2 MiB, so that where transparent huge pages are on for every mapping
+// the kernel can map it in 2 MiB pages if it has them free, but it is not marked MADV_HUGEPAGE:
+// with the kernel's usual defrag setting ("madvise") a marked region's faults wait while the
+// kernel compacts memory to make huge pages, and on a machine whose memory was in use (after
+// the test suite, say) that added 30 to 100 ms of system time to the first render in a process,
+// which is the only render of `rtlab render` (Ex 25 at 1920 x 1024: 70 to 140 ms marked, 72 to
+// 77 ms unmarked, one thread; the aov bunny 46 to 79 ms against 37 to 44 ms, two threads).
+// The renders that reuse the block are as fast either way (its pages are written in order, one
+// translation serving many pixels). The mesh hierarchy's nodes, read all over, keep the mark
+// (21_wide_bvh.h HugePageAllocator).
 namespace {
 struct ImageCache {
     std::mutex mutex;
@@ -163,7 +167,6 @@ static float *allocate_image(size_t floats) {
     if (p == nullptr) {
         p = std::aligned_alloc(huge_page, bytes);
         if (p == nullptr) throw std::bad_alloc();
-        madvise(p, bytes, MADV_HUGEPAGE);
     }
     std::lock_guard<std::mutex> lock(image_cache().mutex);
     cache.live[p] = bytes;
