@@ -19,6 +19,7 @@ from tests.helpers import (
     left_eye,
     material,
     pixel_direction,
+    plane,
     scene_dict,
     sphere,
 )
@@ -198,3 +199,108 @@ def test_a_sphere_seen_by_one_pixel(pixel, stereo):
     lit = np.argwhere(a.image.sum(axis=-1) > 0).tolist()
     assert [j, i] in lit  # the left eye's (or the only) image, columns 0 to 36
     assert len(lit) <= 1 + stereo  # the right eye sees it once at most
+
+
+# A packet of primary rays that all met one plane skips, for their reflections, the spheres
+# whose mirror image's rectangle holds none of its pixels, and for their shadow rays, the
+# spheres whose shadow's rectangle holds none (12_packet.h mirrored_rect(), shadow_rect(), two
+# pixels of margin). A camera that sees only the floor, and a sphere a fifth of a pixel across
+# placed so that the one pixel centre named sees its reflection, or its shadow: at the image's
+# corners and on both sides of a packet's edge (8 pixels of a row) and of a tile's (16). The
+# packets must show both where the one-ray code does (which these tests also check).
+FLOOR_CAMERA = {"eye": [0.0, 2.0, 6.0], "look_at": [0.0, 0.0, 0.0], "width": 37, "height": 21}
+FLOOR_PIXELS = [(0, 0), (36, 20), (7, 3), (8, 3), (15, 15), (16, 16)]
+
+
+def floor_hit(i: int, j: int) -> tuple[np.ndarray, np.ndarray, float]:
+    """The camera's unit ray direction through pixel (i, j)'s centre, the point where it meets the
+    floor y = 0, and a fifth of a pixel's width there per unit distance."""
+    cam = tracer.load_scene(scene_dict(camera=FLOOR_CAMERA)).camera
+    eye = left_eye(cam)[0]
+    d = pixel_direction(cam, i + 0.5, j + 0.5)
+    assert d[1] < 0  # every pixel sees the floor
+    fifth = float(np.linalg.norm(pixel_direction(cam, i + 0.6, j + 0.5) - d))
+    return d, eye + d * (-eye[1] / d[1]), fifth
+
+
+@pytest.mark.parametrize("pixel", FLOOR_PIXELS)
+def test_a_reflection_seen_by_one_pixel(pixel):
+    i, j = pixel
+    d, p, fifth = floor_hit(i, j)
+    eye = p - d * (-2.0 / d[1])  # the eye, 2 above the floor
+    image = eye + d * (np.linalg.norm(p - eye) + 3.0)  # the mirror image, 3 past the floor
+    centre = [float(image[0]), float(-image[1]), float(image[2])]
+    radius = fifth * float(np.linalg.norm(image - eye))
+    data = scene_dict(
+        camera=FLOOR_CAMERA,
+        render={"max_depth": 2},
+        materials={"m": material(ambient=1.0), "mirror": material(reflectivity=1.0)},
+        objects=[plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], "mirror"), sphere(centre, radius)],
+    )
+    a, b = both(tracer.load_scene(data))
+    assert (a.integrator, b.integrator) == ("classic", "classic_packets")
+    assert np.array_equal(a.image, b.image)
+    assert a.rays == b.rays
+    assert a.image[j, i].sum() > 0  # the reflection, where the mirror image was put
+
+
+@pytest.mark.parametrize("pixel", FLOOR_PIXELS)
+@pytest.mark.parametrize("light", ["point", "directional"])
+def test_a_shadow_seen_by_one_pixel(pixel, light):
+    i, j = pixel
+    _, p, fifth = floor_hit(i, j)
+    position = np.array([3.0, 5.0, 2.0])
+    centre = p + 0.5 * (position - p)  # halfway to the light, on pixel (i, j)'s shadow ray
+    radius = fifth * float(np.linalg.norm(centre - left_eye(
+        tracer.load_scene(scene_dict(camera=FLOOR_CAMERA)).camera)[0]))  # fmt: skip
+    if light == "point":
+        lamp = {"type": "point", "position": position.tolist()}
+    else:
+        lamp = {"type": "directional", "direction": (p - position).tolist()}
+    data = scene_dict(
+        camera=FLOOR_CAMERA,
+        render={"max_depth": 1},
+        materials={"m": material(), "floor": material(diffuse=1.0)},
+        lights=[lamp],
+        objects=[plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], "floor"), sphere(centre.tolist(), radius)],
+    )
+    a, b = both(tracer.load_scene(data))
+    assert (a.integrator, b.integrator) == ("classic", "classic_packets")
+    assert np.array_equal(a.image, b.image)
+    assert a.rays == b.rays
+    assert a.image[j, i].sum() == 0  # in the shadow
+    assert (a.image.sum(axis=-1) > 0).mean() > 0.9  # and the floor around it lit
+
+
+def test_packets_equal_single_rays_around_planes():
+    """Where the floor's culling must give up, or could go wrong: a tilted mirror and a wall
+    besides the floor; spheres resting on the floor, cutting through it, under it, and one
+    higher than the point light; a point light under the floor, one above, a distant one."""
+    data = scene_dict(
+        camera={"eye": [0.5, 3.0, 9.0], "look_at": [0.0, 0.5, 0.0], "fov_y": 60.0},
+        render={"max_depth": 4},
+        materials={
+            "m": material(ambient=0.1, diffuse=0.6, specular=0.5, reflectivity=0.4),
+            "mirror": material(ambient=0.05, diffuse=0.3, reflectivity=0.8),
+        },
+        lights=[
+            {"type": "point", "position": [2.0, 3.0, 3.0]},
+            {"type": "point", "position": [-1.0, -2.0, 1.0]},
+            {"type": "directional", "direction": [-0.4, -1.0, -0.3]},
+        ],
+        objects=[
+            plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], "mirror"),
+            plane([0.0, 0.0, -6.0], [0.0, 0.2, 1.0]),
+            plane([-7.0, 0.0, 0.0], [1.0, 0.3, 0.1], "mirror"),
+            sphere([-1.5, 1.0, 0.0], 1.0),
+            sphere([1.5, 0.2, 0.5], 0.7),
+            sphere([0.0, -2.0, 2.0], 0.8),
+            sphere([2.5, 3.5, -1.0], 0.6),
+            sphere([0.3, 0.05, 2.5], 0.05),
+        ],
+    )
+    scene = tracer.load_scene(data).with_overrides(width=97, height=61)
+    a, b = both(scene)
+    assert (a.integrator, b.integrator) == ("classic", "classic_packets")
+    assert np.array_equal(a.image, b.image), f"{int((a.image != b.image).sum())} values differ"
+    assert a.rays == b.rays

@@ -198,6 +198,196 @@ inline Lanes plane_t(const Plane &pl, const RayL &ray) {
     // END SOLUTION
 }
 
+// The pixels whose primary rays may meet a box: a rectangle of the image, in pixel units (pixel
+// (i, j) has its centre at (i + 0.5, j + 0.5)), or every pixel. A box wholly in front of the
+// eye (every corner at positive depth along `forward`; then the eye is outside it) is seen
+// through the convex hull of its corners' images on the image plane, so a ray through a pixel
+// centre outside the rectangle around them misses the box. The rectangle is widened by two
+// pixels, some twelve orders of magnitude more than the roundings of this projection and the
+// slab test's widening of the box (2 gamma(3) of the distance, 14_box.h) move it, so no ray
+// through a pixel outside it meets the box in any test here: skipping those rays' test
+// changes nothing. 81% of the bunny's 1920 x 1024 primary rays miss its box; their packets'
+// set-up (a normalisation and three divisions) was a tenth of the render (perf, issue 12).
+// The same holds for a sphere in its bounding box (render_tile_packets()).
+struct PixelRect {
+    double i_min = -infinity, i_max = infinity, j_min = -infinity, j_max = infinity;
+
+    // Whether a ray through some pixel centre of columns [i0, i1) and rows [j0, j1) may meet it.
+    bool may_meet(int i0, int i1, int j0, int j1) const {
+        return i1 - 0.5 >= i_min && i0 + 0.5 <= i_max && j1 - 0.5 >= j_min && j0 + 0.5 <= j_max;
+    }
+};
+
+// The box's eight corners projected at once, one per lane.
+inline PixelRect pixel_rect(const Camera &cam, const AABB &box) {
+    static_assert(rays_per_packet == 8, "a lane per corner");
+    // Corner k takes the max on axis a where bit a of k is set.
+    const Mask on_x = {0, -1, 0, -1, 0, -1, 0, -1}, on_y = {0, 0, -1, -1, 0, 0, -1, -1},
+               on_z = {0, 0, 0, 0, -1, -1, -1, -1};
+    const Vec3L c{on_x ? splat(box.max.x) : splat(box.min.x),
+                  on_y ? splat(box.max.y) : splat(box.min.y),
+                  on_z ? splat(box.max.z) : splat(box.min.z)};
+    const Vec3L v = c - splat(cam.eye);
+    const Lanes depth = dot(v, splat(cam.forward));
+    if (any(~(depth > 0))) return PixelRect{}; // at or behind the eye (or not finite): all
+    // 03_camera.h primary_ray()'s d = forward + a right + b true_up, solved for each corner.
+    const Lanes inv = 1 / depth;
+    const Lanes a = dot(v, splat(cam.right)) * inv, b = dot(v, splat(cam.true_up)) * inv;
+    const Lanes i = ((a - cam.window_shift) * (1 / cam.plane_width) + 0.5) * cam.width;
+    const Lanes j = (0.5 - b * (1 / cam.plane_height)) * cam.height;
+    PixelRect rect{i[0], i[0], j[0], j[0]};
+    for (int k = 1; k < 8; ++k)
+        rect.i_min = std::min(rect.i_min, i[k]), rect.i_max = std::max(rect.i_max, i[k]),
+        rect.j_min = std::min(rect.j_min, j[k]), rect.j_max = std::max(rect.j_max, j[k]);
+    constexpr double margin = 2; // pixels (see above)
+    rect.i_min -= margin, rect.i_max += margin, rect.j_min -= margin, rect.j_max += margin;
+    if (!(rect.i_max - rect.i_min < infinity && rect.j_max - rect.j_min < infinity))
+        return PixelRect{}; // not finite: all
+    return rect;
+}
+
+// The same rectangles answer two more questions for a primary ray that meets a plane (Ex 25's
+// floor, under most of the image), so that its reflected ray and its shadow rays skip the
+// spheres they cannot meet:
+// - Its reflected ray leaves the point p where it met the plane along the mirror image of its
+//   direction, so it meets a sphere just where the primary ray, going on past p, would meet the
+//   sphere's mirror image in the plane: the pixels of its reflection are those of the mirror
+//   image's box (mirrored_rect()).
+// - Its shadow ray runs from p to a point light (or towards a distant one). A sphere blocks it
+//   only where p lies in the sphere's shadow on the plane: its projection onto the plane along
+//   the lines through the light (or along the light's direction). Where every corner of the
+//   sphere's box lies below the light's height above the plane, that projection is a
+//   projective map of the whole box (a parallel one, a linear map, always), which keeps convex
+//   sets convex: the box's shadow, and the sphere's in it, is the convex hull of the eight
+//   corners' shadows. (A part of the box on the plane's far side casts a shadow too, and so
+//   only widens it.) The pixels that see that shadow are those of the box around the corners'
+//   shadows (shadow_rect()). A sphere whose box reaches up to a point light's height is never
+//   skipped for that light.
+// The rays traced differ from these exact ones by the roundings of the hit point, of its offset
+// (02_ray.h offset_ray_origin(), some ulps of the point) and of the direction: far inside
+// pixel_rect()'s two-pixel margin, so a skipped test is one that would find nothing (the images
+// are compared with the one-ray tracer's, bit for bit, tests/tracer/test_packet.py).
+inline PixelRect mirrored_rect(const Camera &cam, const Plane &pl, const Sphere &sp) {
+    const Vec3 &n = pl.normal; // unit length
+    const Vec3 c = sp.center - n * (2 * dot(sp.center - pl.point, n));
+    const Vec3 r{sp.radius, sp.radius, sp.radius};
+    return pixel_rect(cam, AABB{c - r, c + r});
+}
+
+inline PixelRect shadow_rect(const Camera &cam, const Plane &pl, const Light &light,
+                             const Sphere &sp) {
+    // Heights above the plane are measured on the light's side; a corner counts as below a point
+    // light only with a millionth of the light's height to spare, so that no rounding of these
+    // heights lets a corner at or above it through.
+    const bool point = light.type == Light::Type::point;
+    const Vec3 toward = point ? light.position - pl.point : -light.direction;
+    const double side = dot(toward, pl.normal);
+    if (!(side != 0)) return PixelRect{}; // the light in (or along) the plane: no shadow to bound
+    const Vec3 n = side > 0 ? pl.normal : -pl.normal;
+    const double light_h = std::fabs(side); // a point light's height; for a distant one d.n
+    AABB shadow;
+    for (int k = 0; k < 8; ++k) {
+        const Vec3 x{k & 1 ? sp.center.x + sp.radius : sp.center.x - sp.radius,
+                     k & 2 ? sp.center.y + sp.radius : sp.center.y - sp.radius,
+                     k & 4 ? sp.center.z + sp.radius : sp.center.z - sp.radius};
+        const double h = dot(x - pl.point, n);
+        if (point) {
+            if (!(h < light_h * (1 - 1e-6))) return PixelRect{};
+            shadow.extend(light.position + (x - light.position) * (light_h / (light_h - h)));
+        } else {
+            shadow.extend(x - toward * (h / light_h));
+        }
+    }
+    return pixel_rect(cam, shadow);
+}
+
+// The rectangles of a render (render_tile_packets()): for the first max_culled spheres, each
+// sphere's own (`seen`), its mirror image's in each of the first max_culled_planes planes, and
+// its shadow's on each of those planes from each of the first max_culled_lights lights. Built
+// once a render: a few hundred operations a rectangle.
+constexpr int max_culled = 32, max_culled_planes = 4, max_culled_lights = 8;
+struct PacketCulling {
+    int spheres = 0, planes = 0, lights = 0;
+    std::vector<PixelRect> seen, mirrored, shadowed; // [s], [k][s], [k][l][s]
+
+    explicit PacketCulling(const Scene &scene)
+        : spheres(int(std::min<size_t>(scene.spheres.size(), max_culled))),
+          planes(int(std::min<size_t>(scene.planes.size(), max_culled_planes))),
+          lights(int(std::min<size_t>(scene.lights.size(), max_culled_lights))) {
+        const Camera &cam = scene.camera;
+        for (int s = 0; s < spheres; ++s) {
+            const Sphere &sp = scene.spheres[size_t(s)];
+            const Vec3 r{sp.radius, sp.radius, sp.radius};
+            seen.push_back(pixel_rect(cam, AABB{sp.center - r, sp.center + r}));
+        }
+        for (int k = 0; k < planes; ++k)
+            for (int s = 0; s < spheres; ++s)
+                mirrored.push_back(mirrored_rect(cam, scene.planes[size_t(k)],
+                                                 scene.spheres[size_t(s)]));
+        for (int k = 0; k < planes; ++k)
+            for (int l = 0; l < lights; ++l)
+                for (int s = 0; s < spheres; ++s)
+                    shadowed.push_back(shadow_rect(cam, scene.planes[size_t(k)],
+                                                   scene.lights[size_t(l)],
+                                                   scene.spheres[size_t(s)]));
+    }
+};
+
+// A set of rectangles (one per sphere) sorted for a tile: the spheres no ray of the tile may
+// meet (`skip`), and those some ray may (`maybe`), which each packet checks again.
+struct TileBits {
+    unsigned skip = 0, maybe = 0;
+    void sort(const PixelRect *rects, int spheres, int x0, int x1, int y0, int y1) {
+        skip = maybe = 0;
+        for (int s = 0; s < spheres; ++s)
+            (rects[s].may_meet(x0, x1, y0, y1) ? maybe : skip) |= 1u << s;
+    }
+    // The spheres no ray through pixels [i0, i1) of row j may meet.
+    unsigned packet_skip(const PixelRect *rects, int i0, int i1, int j) const {
+        unsigned bits = skip;
+        for (unsigned m = maybe; m != 0; m &= m - 1) {
+            const int s = __builtin_ctz(m);
+            if (!rects[s].may_meet(i0, i1, j, j + 1)) bits |= 1u << s;
+        }
+        return bits;
+    }
+};
+
+struct TileCulling {
+    const PacketCulling &c;
+    TileBits seen, mirrored[max_culled_planes], shadowed[max_culled_planes][max_culled_lights];
+
+    TileCulling(const PacketCulling &culling, int x0, int x1, int y0, int y1) : c(culling) {
+        const int S = c.spheres;
+        seen.sort(c.seen.data(), S, x0, x1, y0, y1);
+        for (int k = 0; k < c.planes; ++k) {
+            mirrored[k].sort(c.mirrored.data() + k * S, S, x0, x1, y0, y1);
+            for (int l = 0; l < c.lights; ++l)
+                shadowed[k][l].sort(c.shadowed.data() + (k * c.lights + l) * S, S, x0, x1, y0, y1);
+        }
+    }
+};
+
+// A packet of primary rays through pixels [i0, i1) of row j: the spheres its rays cannot meet,
+// and, where every ray of it met plane k, those their reflections and their shadow rays to
+// light l cannot meet (bit s for sphere s).
+struct PrimaryPixels {
+    const TileCulling &tile;
+    int i0, i1, j;
+
+    int planes() const { return tile.c.planes; }
+    int lights() const { return tile.c.lights; }
+    unsigned seen() const { return tile.seen.packet_skip(tile.c.seen.data(), i0, i1, j); }
+    unsigned reflected(int k) const {
+        const PixelRect *rects = tile.c.mirrored.data() + k * tile.c.spheres;
+        return tile.mirrored[k].packet_skip(rects, i0, i1, j);
+    }
+    unsigned shadowed(int k, int l) const {
+        const PixelRect *rects = tile.c.shadowed.data() + (k * tile.c.lights + l) * tile.c.spheres;
+        return tile.shadowed[k][l].packet_skip(rects, i0, i1, j);
+    }
+};
+
 // 09_scene.h closest_hit(): per lane the closest t and which object: spheres are numbered 0,
 // 1, ... and planes after them, -1 where nothing is hit. The numbers are kept in a vector of
 // lanes, written by one select per object (a loop storing lane by lane cost more than the
@@ -220,7 +410,7 @@ inline ClosestL closest_hit(const Scene &scene, const RayL &ray, Mask active, Ra
     const Lanes a = dot(ray.d, ray.d), inv_a = 1 / a;
     int64_t id = 0;
     for (size_t i = 0; i < scene.spheres.size(); ++i, ++id) {
-        if (i < 32 && (skip >> i & 1)) continue;
+        if (i < max_culled && (skip >> i & 1)) continue;
         Lanes t = sphere_t(scene.spheres[i], ray, a, inv_a, c.t, active);
         Mask closer = active & (t < c.t);
         if (!any(closer)) continue;
@@ -245,12 +435,15 @@ inline ClosestL closest_hit(const Scene &scene, const RayL &ray, Mask active, Ra
 // square roots and divisions (0.7x to 0.8x the speed), the per-lane one by its own work and
 // branch (0.97x). Skipping the plane's division where no lane can have t > 0 gained nothing
 // either; sphere_t()'s two early outs do pay: without them 0.7x. Issue 12.)
+// `skip`: as closest_hit()'s (shadow rays of primary rays that met a plane, PrimaryPixels).
 inline Mask any_hit(const Scene &scene, const RayL &ray, Lanes max, Mask active,
-                    RayCounts &counts) {
+                    RayCounts &counts, unsigned skip = 0) {
     Mask blocked = mask_all(false);
     const Lanes a = dot(ray.d, ray.d), inv_a = 1 / a;
-    for (const Sphere &s : scene.spheres) {
+    for (size_t i = 0; i < scene.spheres.size(); ++i) {
         counts.primitive_tests += uint64_t(count(active & ~blocked));
+        if (i < max_culled && (skip >> i & 1)) continue;
+        const Sphere &s = scene.spheres[i];
         blocked |= active & (sphere_t(s, ray, a, inv_a, max, active & ~blocked) != infinity);
         if (!any(active & ~blocked)) return blocked;
     }
@@ -442,23 +635,26 @@ inline ShadowRayL shadow_ray(const HitL &hit, const Vec3L &Ng, const Vec3L &away
     // END SOLUTION
 }
 
-// The lanes of `active` whose shadow ray is blocked.
+// The lanes of `active` whose shadow ray is blocked. `skip`: as any_hit()'s.
 inline Mask in_shadow(const Scene &scene, const ShadowRayL &shadow, Mask active,
-                      RayCounts &counts) {
+                      RayCounts &counts, unsigned skip = 0) {
     // BEGIN SOLUTION L05
     // PROMPT: The packet tracer's copy of 10_classic.h in_shadow(), one ray per lane: not part of
     // PROMPT: the exercise, hidden until lesson L05 is done (the lessons use the one-ray tracer).
     counts.shadow += uint64_t(count(active));
-    return any_hit(scene, shadow.ray, splat(shadow.max_t), active, counts);
+    return any_hit(scene, shadow.ray, splat(shadow.max_t), active, counts, skip);
     // END SOLUTION
 }
 
 // One turn of the loop of 10_classic.h trace(), for the rays of `active`: find the closest hit,
 // add this level's light (or the background) times coef to `color`, then follow the mirror:
 // coef *= reflectivity and the ray becomes the secondary ray. Returns the lanes that go on.
-// `skip`: as closest_hit()'s.
+// `skip`: as closest_hit()'s. `primary`: the pixels of a packet of primary rays, or null; where
+// each of its rays met plane k, `reflected` is set to the spheres their reflections cannot meet
+// (else 0), and their shadow rays skip the spheres they cannot meet.
 inline Mask trace_level(const Scene &scene, RayL &ray, Mask active, Lanes &coef, ColorL &color,
-                        RayCounts &counts, unsigned skip) {
+                        RayCounts &counts, unsigned skip, const PrimaryPixels *primary,
+                        unsigned &reflected) {
     // BEGIN SOLUTION L07
     // PROMPT: The packet tracer's copy of one turn of the loop of 10_classic.h trace() with
     // PROMPT: local_color(), one ray per lane (it restates lessons L04 to L07): not part of the
@@ -468,13 +664,20 @@ inline Mask trace_level(const Scene &scene, RayL &ray, Mask active, Lanes &coef,
     Mask found = active & (closest.t != infinity);
     add_where(active & ~found, color, splat(s.background) * coef);
     active = found;
+    reflected = 0;
     if (!any(active)) return active;
     HitL hit = hit_record(scene, ray, closest, active);
+    const int first = __builtin_ctz(lane_bits(active));
+    int plane = -1; // the plane every ray of a primary packet met (PrimaryPixels), or -1
+    if (primary != nullptr) {
+        const int64_t k = closest.id[first] - int64_t(scene.spheres.size());
+        if (k >= 0 && k < primary->planes() && !any(active & (closest.id != closest.id[first])))
+            plane = int(k);
+    }
 
     // The lane's material, gathered (or splat, when all live lanes share one).
     ColorL m_color;
     Lanes ambient, diffuse, specular, shininess, reflectivity;
-    const int first = __builtin_ctz(lane_bits(active));
     const bool shared = !any(active & (hit.material != hit.material[first]));
     if (shared) {
         const Material &m = scene.materials[size_t(hit.material[first])];
@@ -497,7 +700,8 @@ inline Mask trace_level(const Scene &scene, RayL &ray, Mask active, Lanes &coef,
     // local_color()
     ColorL local = m_color * (splat(s.ambient_light) * ambient);
     Mask shaded = active & ~((diffuse == 0) & (specular == 0));
-    for (const Light &light : scene.lights) {
+    for (size_t l = 0; l < scene.lights.size(); ++l) {
+        const Light &light = scene.lights[l];
         if (!any(shaded)) break;
         Vec3L L;
         if (light.type == Light::Type::directional) L = splat(-light.direction);
@@ -505,7 +709,11 @@ inline Mask trace_level(const Scene &scene, RayL &ray, Mask active, Lanes &coef,
         Lanes NL = dot(N, L);
         Mask lit = shaded & (NL > 0);
         if (!any(lit)) continue;
-        lit &= ~in_shadow(scene, shadow_ray(hit, f.Ng, away, light, lit), lit, counts);
+        const unsigned cannot_block = plane >= 0 && int(l) < primary->lights()
+                                          ? primary->shadowed(plane, int(l))
+                                          : 0;
+        lit &= ~in_shadow(scene, shadow_ray(hit, f.Ng, away, light, lit), lit, counts,
+                          cannot_block);
         if (!any(lit)) continue;
         const ColorL lc = splat(light.color);
         add_where(lit, local, (m_color * lc) * (diffuse * NL));
@@ -524,6 +732,7 @@ inline Mask trace_level(const Scene &scene, RayL &ray, Mask active, Lanes &coef,
     active &= reflectivity != 0;
     coef *= reflectivity;
     if (any(active)) ray = secondary_ray(hit, f.Ng, away, R, active);
+    if (plane >= 0 && any(active)) reflected = primary->reflected(plane);
     return active;
     // END SOLUTION
 }
@@ -535,19 +744,25 @@ namespace rt {
 // 10_classic.h trace() for a packet: the colours of the rays of `active`. (Packing the rays
 // still going into full packets at each level, as a wavefront, was tried: the gathering and
 // scattering cost more than the idle lanes it saves on these scenes.)
-// `skip`: closest_hit()'s for the first level, the primary rays (0 for the levels after).
-inline ColorL trace(const Scene &scene, RayL ray, Mask active, RayCounts &counts, unsigned skip) {
+// `primary`: the pixels of a packet of primary rays (what their rays, and on a plane their
+// reflections and shadow rays, cannot meet: PrimaryPixels), or null.
+inline ColorL trace(const Scene &scene, RayL ray, Mask active, RayCounts &counts,
+                    const PrimaryPixels *primary) {
     // BEGIN SOLUTION L07
     // PROMPT: The packet tracer's copy of 10_classic.h trace(), one ray per lane: not part of the
     // PROMPT: exercise, hidden until lesson L07 is done (the lessons use the one-ray tracer).
     const Settings &s = scene.settings;
     ColorL color{splat(0), splat(0), splat(0)};
     Lanes coef = splat(1.0);
+    unsigned skip = primary != nullptr ? primary->seen() : 0; // closest_hit()'s, this level
     for (int level = 1; level <= s.max_depth; ++level) { // past the last level: black
         active &= ~(coef < s.min_coefficient);            // "coef << 1": black
         if (!any(active)) break;
         if (level > 1) counts.secondary += uint64_t(count(active));
-        active = trace_level(scene, ray, active, coef, color, counts, level == 1 ? skip : 0);
+        unsigned next = 0;
+        active = trace_level(scene, ray, active, coef, color, counts, skip,
+                             level == 1 ? primary : nullptr, next);
+        skip = next;
     }
     return color;
     // END SOLUTION
@@ -588,54 +803,6 @@ inline RayL primary_rays(const Camera &cam, const Vec3L &across, int j) {
     return {splat(cam.eye), normalize(d)};
 }
 
-// The pixels whose primary rays may meet a box: a rectangle of the image, in pixel units (pixel
-// (i, j) has its centre at (i + 0.5, j + 0.5)), or every pixel. A box wholly in front of the
-// eye (every corner at positive depth along `forward`; then the eye is outside it) is seen
-// through the convex hull of its corners' images on the image plane, so a ray through a pixel
-// centre outside the rectangle around them misses the box. The rectangle is widened by two
-// pixels, some twelve orders of magnitude more than the roundings of this projection and the
-// slab test's widening of the box (2 gamma(3) of the distance, 14_box.h) move it, so no ray
-// through a pixel outside it meets the box in any test here: skipping those rays' test
-// changes nothing. 81% of the bunny's 1920 x 1024 primary rays miss its box; their packets'
-// set-up (a normalisation and three divisions) was a tenth of the render (perf, issue 12).
-// The same holds for a sphere in its bounding box (render_tile_packets()).
-struct PixelRect {
-    double i_min = -infinity, i_max = infinity, j_min = -infinity, j_max = infinity;
-
-    // Whether a ray through some pixel centre of columns [i0, i1) and rows [j0, j1) may meet it.
-    bool may_meet(int i0, int i1, int j0, int j1) const {
-        return i1 - 0.5 >= i_min && i0 + 0.5 <= i_max && j1 - 0.5 >= j_min && j0 + 0.5 <= j_max;
-    }
-};
-
-// The box's eight corners projected at once, one per lane.
-inline PixelRect pixel_rect(const Camera &cam, const AABB &box) {
-    static_assert(rays_per_packet == 8, "a lane per corner");
-    // Corner k takes the max on axis a where bit a of k is set.
-    const Mask on_x = {0, -1, 0, -1, 0, -1, 0, -1}, on_y = {0, 0, -1, -1, 0, 0, -1, -1},
-               on_z = {0, 0, 0, 0, -1, -1, -1, -1};
-    const Vec3L c{on_x ? splat(box.max.x) : splat(box.min.x),
-                  on_y ? splat(box.max.y) : splat(box.min.y),
-                  on_z ? splat(box.max.z) : splat(box.min.z)};
-    const Vec3L v = c - splat(cam.eye);
-    const Lanes depth = dot(v, splat(cam.forward));
-    if (any(~(depth > 0))) return PixelRect{}; // at or behind the eye (or not finite): all
-    // 03_camera.h primary_ray()'s d = forward + a right + b true_up, solved for each corner.
-    const Lanes inv = 1 / depth;
-    const Lanes a = dot(v, splat(cam.right)) * inv, b = dot(v, splat(cam.true_up)) * inv;
-    const Lanes i = ((a - cam.window_shift) * (1 / cam.plane_width) + 0.5) * cam.width;
-    const Lanes j = (0.5 - b * (1 / cam.plane_height)) * cam.height;
-    PixelRect rect{i[0], i[0], j[0], j[0]};
-    for (int k = 1; k < 8; ++k)
-        rect.i_min = std::min(rect.i_min, i[k]), rect.i_max = std::max(rect.i_max, i[k]),
-        rect.j_min = std::min(rect.j_min, j[k]), rect.j_max = std::max(rect.j_max, j[k]);
-    constexpr double margin = 2; // pixels (see above)
-    rect.i_min -= margin, rect.i_max += margin, rect.j_min -= margin, rect.j_max += margin;
-    if (!(rect.i_max - rect.i_min < infinity && rect.j_max - rect.j_min < infinity))
-        return PixelRect{}; // not finite: all
-    return rect;
-}
-
 inline void store_pixels(float *out, int width, int i0, int j, int n, const ColorL &c) {
     float *px = out + (size_t(j) * width + i0) * 3;
     for (int k = 0; k < n; ++k, px += 3)
@@ -643,9 +810,10 @@ inline void store_pixels(float *out, int width, int i0, int j, int n, const Colo
 }
 
 // A tile of pixels, traced a packet at a time: the rays of 11_render.h for_each_sample(), in
-// the same order, so each pixel's sum adds the same colours in the same order.
-inline void render_tile_packets(const Scene &scene, int x0, int y0, int x1, int y1, float *out,
-                                RayCounts &counts) {
+// the same order, so each pixel's sum adds the same colours in the same order. `culling`: the
+// render's rectangles (PacketCulling(scene)).
+inline void render_tile_packets(const PacketCulling &culling, const Scene &scene, int x0,
+                                int y0, int x1, int y1, float *out, RayCounts &counts) {
     const Camera &cam = scene.camera;
     if (scene.settings.spp == 1) { // one ray per pixel: whole packets along each row
         constexpr int most = tile_size / rays_per_packet; // packets across the widest tile
@@ -656,17 +824,9 @@ inline void render_tile_packets(const Scene &scene, int x0, int y0, int x1, int 
         // the sphere's bounding box, pixel_rect()); the others' tests are skipped, and per
         // packet those of the rest it cannot meet (the first 32 spheres: a bit each). Ex 25's
         // sky and floor packets skip all three spheres: 1.03x to 1.07x on one thread, 1.03x to
-        // 1.05x on two (paired A/B, issue 12).
-        const int culled = int(std::min<size_t>(scene.spheres.size(), 32));
-        PixelRect seen[32];
-        unsigned tile_skip = 0, maybe = 0;
-        for (int s = 0; s < culled; ++s) {
-            const Sphere &sp = scene.spheres[size_t(s)];
-            const Vec3 r{sp.radius, sp.radius, sp.radius};
-            seen[s] = pixel_rect(cam, AABB{sp.center - r, sp.center + r});
-            if (seen[s].may_meet(x0, x1, y0, y1)) maybe |= 1u << s;
-            else tile_skip |= 1u << s;
-        }
+        // 1.05x on two (paired A/B, issue 12). The same for the floor's reflections and shadow
+        // rays (PacketCulling).
+        const TileCulling tile(culling, x0, x1, y0, y1);
         // A row's primary rays are made before any of them is traced. Each normalisation is a
         // square root and then a division, some 50 cycles of latency, and made one packet at
         // a time the trace waited for it (the instructions after it held 9% of Ex 25's time,
@@ -681,13 +841,10 @@ inline void render_tile_packets(const Scene &scene, int x0, int y0, int x1, int 
                 Mask active = mask_all(false);
                 for (int k = 0; k < n; ++k) active[k] = -1;
                 counts.primary += uint64_t(n);
-                unsigned skip = tile_skip;
-                for (unsigned bits = maybe; bits != 0; bits &= bits - 1) {
-                    const int s = __builtin_ctz(bits);
-                    if (!seen[s].may_meet(i, i + n, j, j + 1)) skip |= 1u << s;
-                }
+                const PrimaryPixels pixels{tile, i, i + n, j};
                 const RayL rays = p < most ? row[p] : primary_rays(cam, i, j); // a wider tile
-                store_pixels(out, cam.width, i, j, n, trace(scene, rays, active, counts, skip));
+                const ColorL c = trace(scene, rays, active, counts, &pixels);
+                store_pixels(out, cam.width, i, j, n, c);
             }
         }
         return;
@@ -704,7 +861,7 @@ inline void render_tile_packets(const Scene &scene, int x0, int y0, int x1, int 
                 packet.o.x[k] = packet.o.y[k] = packet.o.z[k] = 0,
                 packet.d.x[k] = packet.d.y[k] = 0, packet.d.z[k] = 1;
         }
-        ColorL c = trace(scene, packet, active, counts, 0);
+        ColorL c = trace(scene, packet, active, counts, nullptr);
         for (int k = 0; k < n; ++k) sums[size_t(pixel[k])] += Color{c.r[k], c.g[k], c.b[k]};
         n = 0;
     };

@@ -231,10 +231,17 @@ static std::tuple<Image, nb::dict, Integrator> render(const rt::Scene &scene, in
         };
         std::unique_ptr<rt::PathContext> context;
         std::unique_ptr<rt::CulledQueries> culled;
+        std::unique_ptr<rt::PacketCulling> packet_culling;
         rt::TileRenderer tiles;
         switch (integrator) {
         case Integrator::classic: tiles = rt::render_tile_rays; break;
-        case Integrator::classic_packets: tiles = rt::render_tile_packets; break;
+        case Integrator::classic_packets:
+            packet_culling = std::make_unique<rt::PacketCulling>(scene);
+            tiles = [&](const rt::Scene &, int x0, int y0, int x1, int y1, float *out,
+                        rt::RayCounts &c) {
+                rt::render_tile_packets(*packet_culling, scene, x0, y0, x1, y1, out, c);
+            };
+            break;
         case Integrator::aov: tiles = rt::render_tile_aov; break;
         case Integrator::aov_packets: tiles = rt::render_tile_aov_packets; break;
         case Integrator::path:
