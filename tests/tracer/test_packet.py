@@ -304,3 +304,44 @@ def test_packets_equal_single_rays_around_planes():
     assert (a.integrator, b.integrator) == ("classic", "classic_packets")
     assert np.array_equal(a.image, b.image), f"{int((a.image != b.image).sum())} values differ"
     assert a.rays == b.rays
+
+
+# Shadow rays from a packet's points on spheres skip the spheres that cannot shadow those
+# (12_packet.h cannot_shadow(): the light's cones, or a distant light's cylinders, of the two
+# spheres do not overlap). A sphere a fifth of a pixel across, halfway from the point of a big
+# sphere that one pixel centre sees to the light: that pixel alone is in its shadow, and the
+# packets must agree.
+@pytest.mark.parametrize("pixel", [(18, 10), (15, 8), (16, 8), (14, 10), (23, 12), (20, 5)])
+@pytest.mark.parametrize("light", ["point", "directional"])
+def test_a_sphere_shadowed_at_one_pixel(pixel, light):
+    camera = {"width": 37, "height": 21}
+    cam = tracer.load_scene(scene_dict(camera=camera)).camera
+    eye = left_eye(cam)[0]
+    i, j = pixel
+    d = pixel_direction(cam, i + 0.5, j + 0.5)
+    b = float(np.dot(eye, d))  # the unit sphere at the origin: t^2 + 2 b t + |eye|^2 - 1 = 0
+    disc = b * b - (float(np.dot(eye, eye)) - 1.0)
+    assert disc > 0  # the pixel sees the big sphere
+    x = eye + d * (-b - np.sqrt(disc))
+    position = np.array([3.0, 4.0, 5.0])
+    assert np.dot(x, position - x) > 0  # and its point faces the light
+    centre = x + 0.5 * (position - x)
+    fifth = float(np.linalg.norm(pixel_direction(cam, i + 0.6, j + 0.5) - d))
+    radius = 0.5 * fifth * float(np.linalg.norm(x - eye))  # its shadow: a fifth of a pixel
+    if light == "point":
+        lamp = {"type": "point", "position": position.tolist()}
+    else:
+        lamp = {"type": "directional", "direction": (x - position).tolist()}
+    data = scene_dict(
+        camera=camera,
+        render={"max_depth": 1},
+        materials={"m": material(), "lit": material(diffuse=1.0)},
+        lights=[lamp],
+        objects=[sphere([0.0, 0.0, 0.0], 1.0, "lit"), sphere(centre.tolist(), radius)],
+    )
+    a, b2 = both(tracer.load_scene(data))
+    assert (a.integrator, b2.integrator) == ("classic", "classic_packets")
+    assert np.array_equal(a.image, b2.image)
+    assert a.rays == b2.rays
+    assert a.image[j, i].sum() == 0  # in the small sphere's shadow
+    assert a.image[j, i - 1].sum() > 0 and a.image[j, i + 1].sum() > 0  # its neighbours lit

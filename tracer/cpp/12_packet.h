@@ -301,14 +301,41 @@ inline PixelRect shadow_rect(const Camera &cam, const Plane &pl, const Light &li
     return pixel_rect(cam, shadow);
 }
 
+// Whether sphere `b` can block no shadow ray that leaves sphere `a` for the light: for a point
+// light, where no line from the light meets both (the angle between the centres, seen from the
+// light, is more than the two spheres' angular radii: the cones do not overlap), or where all
+// of `a` is nearer the light than all of `b`; for a distant light, where the two spheres'
+// shadow cylinders do not overlap, or all of `a` is further towards the light than all of `b`.
+// With a millionth to spare (of a radian, or of the distances), which covers the shadow ray's
+// offset origin and every rounding here and in sphere_t() (a ray that misses a sphere by more
+// than some ulps of its radius is not found to meet it, 05_sphere.h). Never for a == b.
+inline bool cannot_shadow(const Sphere &a, const Sphere &b, const Light &light) {
+    constexpr double spare = 1e-6;
+    if (light.type == Light::Type::directional) {
+        const Vec3 u = -light.direction, w = a.center - b.center;
+        const double along = dot(w, u), across = length(w - u * along);
+        const double apart = a.radius + b.radius + spare * (length(w) + a.radius + b.radius);
+        return along > apart || across > apart;
+    }
+    const Vec3 va = a.center - light.position, vb = b.center - light.position;
+    const double da = length(va), db = length(vb);
+    if (!(da > a.radius * (1 + spare) && db > b.radius * (1 + spare))) return false; // inside
+    if ((da + a.radius) * (1 + spare) < (db - b.radius) * (1 - spare)) return true;
+    const double between = std::atan2(length(cross(va, vb)), dot(va, vb));
+    return between > std::asin(a.radius / da) + std::asin(b.radius / db) + spare;
+}
+
 // The rectangles of a render (render_tile_packets()): for the first max_culled spheres, each
 // sphere's own (`seen`), its mirror image's in each of the first max_culled_planes planes, and
 // its shadow's on each of those planes from each of the first max_culled_lights lights. Built
 // once a render: a few hundred operations a rectangle.
 constexpr int max_culled = 32, max_culled_planes = 4, max_culled_lights = 8;
+// And for the points of each of those spheres, by each of those lights, the spheres that cannot
+// block their shadow rays (cannot_shadow(), bit b of unshadowing[a][l]), whatever ray met them.
 struct PacketCulling {
     int spheres = 0, planes = 0, lights = 0;
     std::vector<PixelRect> seen, mirrored, shadowed; // [s], [k][s], [k][l][s]
+    std::vector<unsigned> unshadowing;               // [a][l]
 
     explicit PacketCulling(const Scene &scene)
         : spheres(int(std::min<size_t>(scene.spheres.size(), max_culled))),
@@ -330,6 +357,24 @@ struct PacketCulling {
                     shadowed.push_back(shadow_rect(cam, scene.planes[size_t(k)],
                                                    scene.lights[size_t(l)],
                                                    scene.spheres[size_t(s)]));
+        for (int a = 0; a < spheres; ++a)
+            for (int l = 0; l < lights; ++l) {
+                unsigned bits = 0;
+                for (int b = 0; b < spheres; ++b)
+                    if (b != a && cannot_shadow(scene.spheres[size_t(a)], scene.spheres[size_t(b)],
+                                                scene.lights[size_t(l)]))
+                        bits |= 1u << b;
+                unshadowing.push_back(bits);
+            }
+    }
+
+    // The spheres that cannot block a shadow ray to light l from a point of any of the spheres
+    // of `met` (bit a for sphere a).
+    unsigned cannot_block(unsigned met, int l) const {
+        unsigned bits = ~0u;
+        for (; met != 0; met &= met - 1)
+            bits &= unshadowing[size_t(__builtin_ctz(met) * lights + l)];
+        return bits;
     }
 };
 
@@ -486,6 +531,8 @@ inline Vec3L offset_ray_origin(const Vec3L &p, const Vec3L &p_error, const Vec3L
 struct HitL {
     Vec3L p, p_error, N, Ng;
     Mask material;
+    unsigned spheres_met = 0; // bit s: some lane met sphere s (s < max_culled)
+    bool others_met = false;  // some lane met a plane, or a sphere after those
 };
 
 inline Vec3L select(Mask m, const Vec3 &a, const Vec3L &b) {
@@ -502,8 +549,14 @@ inline HitL hit_record(const Scene &scene, const RayL &ray, const ClosestL &c, M
     h.material = Mask{};
     int64_t id = 0;
     for (const Sphere &s : scene.spheres) {
-        const Mask here = active & (c.id == id++);
-        if (!any(here)) continue;
+        const Mask here = active & (c.id == id);
+        if (!any(here)) {
+            ++id;
+            continue;
+        }
+        if (id < max_culled) h.spheres_met |= 1u << id;
+        else h.others_met = true;
+        ++id;
         centre = select(here, s.center, centre);
         radius = select(here, splat(s.radius), radius);
         is_sphere |= here;
@@ -512,6 +565,7 @@ inline HitL hit_record(const Scene &scene, const RayL &ray, const ClosestL &c, M
     for (const Plane &pl : scene.planes) {
         const Mask here = active & (c.id == id++);
         if (!any(here)) continue;
+        h.others_met = true;
         centre = select(here, pl.point, centre);
         normal = select(here, pl.normal, normal);
         h.material = select(here, Mask{} + pl.material, h.material);
@@ -649,12 +703,14 @@ inline Mask in_shadow(const Scene &scene, const ShadowRayL &shadow, Mask active,
 // One turn of the loop of 10_classic.h trace(), for the rays of `active`: find the closest hit,
 // add this level's light (or the background) times coef to `color`, then follow the mirror:
 // coef *= reflectivity and the ray becomes the secondary ray. Returns the lanes that go on.
-// `skip`: as closest_hit()'s. `primary`: the pixels of a packet of primary rays, or null; where
-// each of its rays met plane k, `reflected` is set to the spheres their reflections cannot meet
-// (else 0), and their shadow rays skip the spheres they cannot meet.
+// `skip`: as closest_hit()'s. `culling`: the render's (PacketCulling), or null: where every ray
+// met a sphere, shadow rays skip the spheres that cannot shadow those. `primary`: the pixels of
+// a packet of primary rays, or null; where each of its rays met plane k, `reflected` is set to
+// the spheres their reflections cannot meet (else 0), and their shadow rays skip the spheres
+// they cannot meet.
 inline Mask trace_level(const Scene &scene, RayL &ray, Mask active, Lanes &coef, ColorL &color,
-                        RayCounts &counts, unsigned skip, const PrimaryPixels *primary,
-                        unsigned &reflected) {
+                        RayCounts &counts, unsigned skip, const PacketCulling *culling,
+                        const PrimaryPixels *primary, unsigned &reflected) {
     // BEGIN SOLUTION L07
     // PROMPT: The packet tracer's copy of one turn of the loop of 10_classic.h trace() with
     // PROMPT: local_color(), one ray per lane (it restates lessons L04 to L07): not part of the
@@ -709,9 +765,11 @@ inline Mask trace_level(const Scene &scene, RayL &ray, Mask active, Lanes &coef,
         Lanes NL = dot(N, L);
         Mask lit = shaded & (NL > 0);
         if (!any(lit)) continue;
-        const unsigned cannot_block = plane >= 0 && int(l) < primary->lights()
-                                          ? primary->shadowed(plane, int(l))
-                                          : 0;
+        unsigned cannot_block = 0;
+        if (culling != nullptr && int(l) < culling->lights) {
+            if (!hit.others_met) cannot_block = culling->cannot_block(hit.spheres_met, int(l));
+            else if (plane >= 0) cannot_block = primary->shadowed(plane, int(l));
+        }
         lit &= ~in_shadow(scene, shadow_ray(hit, f.Ng, away, light, lit), lit, counts,
                           cannot_block);
         if (!any(lit)) continue;
@@ -744,10 +802,11 @@ namespace rt {
 // 10_classic.h trace() for a packet: the colours of the rays of `active`. (Packing the rays
 // still going into full packets at each level, as a wavefront, was tried: the gathering and
 // scattering cost more than the idle lanes it saves on these scenes.)
-// `primary`: the pixels of a packet of primary rays (what their rays, and on a plane their
-// reflections and shadow rays, cannot meet: PrimaryPixels), or null.
+// `culling`: the render's (PacketCulling), or null. `primary`: the pixels of a packet of
+// primary rays (what their rays, and on a plane their reflections and shadow rays, cannot meet:
+// PrimaryPixels), or null.
 inline ColorL trace(const Scene &scene, RayL ray, Mask active, RayCounts &counts,
-                    const PrimaryPixels *primary) {
+                    const PacketCulling *culling, const PrimaryPixels *primary) {
     // BEGIN SOLUTION L07
     // PROMPT: The packet tracer's copy of 10_classic.h trace(), one ray per lane: not part of the
     // PROMPT: exercise, hidden until lesson L07 is done (the lessons use the one-ray tracer).
@@ -760,7 +819,7 @@ inline ColorL trace(const Scene &scene, RayL ray, Mask active, RayCounts &counts
         if (!any(active)) break;
         if (level > 1) counts.secondary += uint64_t(count(active));
         unsigned next = 0;
-        active = trace_level(scene, ray, active, coef, color, counts, skip,
+        active = trace_level(scene, ray, active, coef, color, counts, skip, culling,
                              level == 1 ? primary : nullptr, next);
         skip = next;
     }
@@ -843,7 +902,7 @@ inline void render_tile_packets(const PacketCulling &culling, const Scene &scene
                 counts.primary += uint64_t(n);
                 const PrimaryPixels pixels{tile, i, i + n, j};
                 const RayL rays = p < most ? row[p] : primary_rays(cam, i, j); // a wider tile
-                const ColorL c = trace(scene, rays, active, counts, &pixels);
+                const ColorL c = trace(scene, rays, active, counts, &culling, &pixels);
                 store_pixels(out, cam.width, i, j, n, c);
             }
         }
@@ -861,7 +920,7 @@ inline void render_tile_packets(const PacketCulling &culling, const Scene &scene
                 packet.o.x[k] = packet.o.y[k] = packet.o.z[k] = 0,
                 packet.d.x[k] = packet.d.y[k] = 0, packet.d.z[k] = 1;
         }
-        ColorL c = trace(scene, packet, active, counts, nullptr);
+        ColorL c = trace(scene, packet, active, counts, &culling, nullptr);
         for (int k = 0; k < n; ++k) sums[size_t(pixel[k])] += Color{c.r[k], c.g[k], c.b[k]};
         n = 0;
     };
