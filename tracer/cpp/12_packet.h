@@ -81,6 +81,14 @@ inline unsigned lane_bits(Mask m) {
 #endif
 }
 inline int count(Mask m) { return __builtin_popcount(lane_bits(m)); }
+// The first n lanes, by one comparison. (Set lane by lane, the mask was eight stores that the
+// vector load of it after them could not take from the store buffer: a render of Ex 25's camera
+// with no objects took 9.8 ms that way and 7.7 ms this way, issue 12.)
+inline Mask first_lanes(int n) {
+    static_assert(rays_per_packet == 8, "a number per lane");
+    const Mask lane = {0, 1, 2, 3, 4, 5, 6, 7};
+    return lane < n;
+}
 inline bool any(Mask m) { return lane_bits(m) != 0; }
 // Each lane's correctly rounded square root, as std::sqrt gives it. Written as a loop over the
 // lanes, GCC vectorised it at its preferred width, 256 bits on Intel even with AVX-512: two
@@ -897,8 +905,7 @@ inline void render_tile_packets(const PacketCulling &culling, const Scene &scene
                 row[p] = primary_rays(cam, across[p], j);
             for (int p = 0, i = x0; i < x1; ++p, i += rays_per_packet) {
                 const int n = std::min(rays_per_packet, x1 - i);
-                Mask active = mask_all(false);
-                for (int k = 0; k < n; ++k) active[k] = -1;
+                const Mask active = first_lanes(n);
                 counts.primary += uint64_t(n);
                 const PrimaryPixels pixels{tile, i, i + n, j};
                 const RayL rays = p < most ? row[p] : primary_rays(cam, i, j); // a wider tile
@@ -913,13 +920,10 @@ inline void render_tile_packets(const PacketCulling &culling, const Scene &scene
     RayL packet;
     int pixel[rays_per_packet], n = 0;
     auto flush = [&] {
-        Mask active = mask_all(false);
-        for (int k = 0; k < rays_per_packet; ++k) {
-            active[k] = k < n ? -1 : 0;
-            if (k >= n) // idle lanes: any harmless ray, masked off
-                packet.o.x[k] = packet.o.y[k] = packet.o.z[k] = 0,
-                packet.d.x[k] = packet.d.y[k] = 0, packet.d.z[k] = 1;
-        }
+        const Mask active = first_lanes(n);
+        for (int k = n; k < rays_per_packet; ++k) // idle lanes: any harmless ray, masked off
+            packet.o.x[k] = packet.o.y[k] = packet.o.z[k] = 0,
+            packet.d.x[k] = packet.d.y[k] = 0, packet.d.z[k] = 1;
         ColorL c = trace(scene, packet, active, counts, &culling, nullptr);
         for (int k = 0; k < n; ++k) sums[size_t(pixel[k])] += Color{c.r[k], c.g[k], c.b[k]};
         n = 0;
