@@ -487,8 +487,11 @@ inline ClosestL closest_hit(const Scene &scene, const RayL &ray, Mask active, Ra
 // and still cost more than the tests they saved: the packet's cone by its serial reductions,
 // square roots and divisions (0.7x to 0.8x the speed), the per-lane one by its own work and
 // branch (0.97x). Skipping the plane's division where no lane can have t > 0 gained nothing
-// either; sphere_t()'s two early outs do pay: without them 0.7x. Issue 12.)
-// `skip`: as closest_hit()'s (shadow rays of primary rays that met a plane, PrimaryPixels).
+// either; sphere_t()'s two early outs do pay: without them 0.7x. Issue 12. What pays is the
+// same geometry worked out once a render instead of per packet: `skip`.)
+// `skip`: as closest_hit()'s: the spheres that cannot shadow the points of the spheres the
+// packet met, or for primary rays that all met a plane, the spheres whose shadow on it none of
+// the packet's pixels sees (PacketCulling, PrimaryPixels).
 inline Mask any_hit(const Scene &scene, const RayL &ray, Lanes max, Mask active,
                     RayCounts &counts, unsigned skip = 0) {
     Mask blocked = mask_all(false);
