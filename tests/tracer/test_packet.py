@@ -212,10 +212,11 @@ FLOOR_CAMERA = {"eye": [0.0, 2.0, 6.0], "look_at": [0.0, 0.0, 0.0], "width": 37,
 FLOOR_PIXELS = [(0, 0), (36, 20), (7, 3), (8, 3), (15, 15), (16, 16)]
 
 
-def floor_hit(i: int, j: int) -> tuple[np.ndarray, np.ndarray, float]:
-    """The camera's unit ray direction through pixel (i, j)'s centre, the point where it meets the
-    floor y = 0, and a fifth of a pixel's width there per unit distance."""
-    cam = tracer.load_scene(scene_dict(camera=FLOOR_CAMERA)).camera
+def floor_hit(i: int, j: int, camera: dict = FLOOR_CAMERA) -> tuple[np.ndarray, np.ndarray, float]:
+    """The camera's unit ray direction through pixel (i, j)'s centre (the left eye's, for a
+    stereo pair), the point where it meets the floor y = 0, and a fifth of a pixel's width there
+    per unit distance."""
+    cam = tracer.load_scene(scene_dict(camera=camera)).camera
     eye = left_eye(cam)[0]
     d = pixel_direction(cam, i + 0.5, j + 0.5)
     assert d[1] < 0  # every pixel sees the floor
@@ -224,15 +225,19 @@ def floor_hit(i: int, j: int) -> tuple[np.ndarray, np.ndarray, float]:
 
 
 @pytest.mark.parametrize("pixel", FLOOR_PIXELS)
-def test_a_reflection_seen_by_one_pixel(pixel):
+@pytest.mark.parametrize("stereo", [False, True])
+def test_a_reflection_seen_by_one_pixel(pixel, stereo):
     i, j = pixel
-    d, p, fifth = floor_hit(i, j)
+    camera = dict(FLOOR_CAMERA)
+    if stereo:
+        camera["stereo"] = {"eye_separation": 1.0, "convergence": 4.0, "layout": "side_by_side"}
+    d, p, fifth = floor_hit(i, j, camera)
     eye = p - d * (-2.0 / d[1])  # the eye, 2 above the floor
     image = eye + d * (np.linalg.norm(p - eye) + 3.0)  # the mirror image, 3 past the floor
     centre = [float(image[0]), float(-image[1]), float(image[2])]
     radius = fifth * float(np.linalg.norm(image - eye))
     data = scene_dict(
-        camera=FLOOR_CAMERA,
+        camera=camera,
         render={"max_depth": 2},
         materials={"m": material(ambient=1.0), "mirror": material(reflectivity=1.0)},
         objects=[plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], "mirror"), sphere(centre, radius)],
@@ -241,7 +246,7 @@ def test_a_reflection_seen_by_one_pixel(pixel):
     assert (a.integrator, b.integrator) == ("classic", "classic_packets")
     assert np.array_equal(a.image, b.image)
     assert a.rays == b.rays
-    assert a.image[j, i].sum() > 0  # the reflection, where the mirror image was put
+    assert a.image[j, i].sum() > 0  # the reflection, where the mirror image was put (left eye)
 
 
 @pytest.mark.parametrize("pixel", FLOOR_PIXELS)
