@@ -350,3 +350,30 @@ def test_a_sphere_shadowed_at_one_pixel(pixel, light):
     assert a.rays == b2.rays
     assert a.image[j, i].sum() == 0  # in the small sphere's shadow
     assert a.image[j, i - 1].sum() > 0 and a.image[j, i + 1].sum() > 0  # its neighbours lit
+
+
+# With several samples a pixel, a packet holds eight samples in order (at spp = 2, those of four
+# pixels of a row) and skips what none of its samples' image points can see. A mirror image 0.4
+# pixel in radius at the centre of the first pixel of a packet (columns 4m of a tile's rows):
+# the packet's last samples lie 2.5 pixels or more from it, past the rectangle's margin, so a
+# span taken from them alone would lose the reflection. (Pixels where one of the seeded samples
+# meets it.)
+@pytest.mark.parametrize("pixel", [(4, 3), (12, 10), (20, 17), (28, 6)])
+def test_a_reflection_in_the_first_pixel_of_a_packet_of_samples(pixel):
+    i, j = pixel
+    d, p, fifth = floor_hit(i, j)
+    eye = p - d * (-2.0 / d[1])
+    image = eye + d * (np.linalg.norm(p - eye) + 3.0)
+    centre = [float(image[0]), float(-image[1]), float(image[2])]
+    radius = 4 * fifth * float(np.linalg.norm(image - eye))  # 0.4 pixel
+    data = scene_dict(
+        camera=FLOOR_CAMERA,
+        render={"max_depth": 2, "spp": 2, "seed": 5},
+        materials={"m": material(ambient=1.0), "mirror": material(reflectivity=1.0)},
+        objects=[plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], "mirror"), sphere(centre, radius)],
+    )
+    a, b = both(tracer.load_scene(data))
+    assert (a.integrator, b.integrator) == ("classic", "classic_packets")
+    assert np.array_equal(a.image, b.image)
+    assert a.rays == b.rays
+    assert a.image[j, i].sum() > 0  # some sample of the pixel sees the reflection

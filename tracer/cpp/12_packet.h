@@ -217,12 +217,25 @@ inline Lanes plane_t(const Plane &pl, const RayL &ray) {
 // changes nothing. 81% of the bunny's 1920 x 1024 primary rays miss its box; their packets'
 // set-up (a normalisation and three divisions) was a tenth of the render (perf, issue 12).
 // The same holds for a sphere in its bounding box (render_tile_packets()).
+// The image points, in pixel units, that a set of rays passes through lie in [x0, x1] x [y0, y1].
+struct ImageSpan {
+    double x0, x1, y0, y1;
+};
+// The centres of the pixels of columns [i0, i1) and rows [j0, j1).
+inline ImageSpan pixel_centres(int i0, int i1, int j0, int j1) {
+    return {i0 + 0.5, i1 - 0.5, j0 + 0.5, j1 - 0.5};
+}
+
 struct PixelRect {
     double i_min = -infinity, i_max = infinity, j_min = -infinity, j_max = infinity;
 
+    // Whether a ray through some image point of `span` may meet it.
+    bool may_meet(const ImageSpan &span) const {
+        return span.x1 >= i_min && span.x0 <= i_max && span.y1 >= j_min && span.y0 <= j_max;
+    }
     // Whether a ray through some pixel centre of columns [i0, i1) and rows [j0, j1) may meet it.
     bool may_meet(int i0, int i1, int j0, int j1) const {
-        return i1 - 0.5 >= i_min && i0 + 0.5 <= i_max && j1 - 0.5 >= j_min && j0 + 0.5 <= j_max;
+        return may_meet(pixel_centres(i0, i1, j0, j1));
     }
 };
 
@@ -390,17 +403,16 @@ struct PacketCulling {
 // meet (`skip`), and those some ray may (`maybe`), which each packet checks again.
 struct TileBits {
     unsigned skip = 0, maybe = 0;
-    void sort(const PixelRect *rects, int spheres, int x0, int x1, int y0, int y1) {
+    void sort(const PixelRect *rects, int spheres, const ImageSpan &tile) {
         skip = maybe = 0;
-        for (int s = 0; s < spheres; ++s)
-            (rects[s].may_meet(x0, x1, y0, y1) ? maybe : skip) |= 1u << s;
+        for (int s = 0; s < spheres; ++s) (rects[s].may_meet(tile) ? maybe : skip) |= 1u << s;
     }
-    // The spheres no ray through pixels [i0, i1) of row j may meet.
-    unsigned packet_skip(const PixelRect *rects, int i0, int i1, int j) const {
+    // The spheres no ray through the image points of `packet` (within the tile's) may meet.
+    unsigned packet_skip(const PixelRect *rects, const ImageSpan &packet) const {
         unsigned bits = skip;
         for (unsigned m = maybe; m != 0; m &= m - 1) {
             const int s = __builtin_ctz(m);
-            if (!rects[s].may_meet(i0, i1, j, j + 1)) bits |= 1u << s;
+            if (!rects[s].may_meet(packet)) bits |= 1u << s;
         }
         return bits;
     }
@@ -410,34 +422,35 @@ struct TileCulling {
     const PacketCulling &c;
     TileBits seen, mirrored[max_culled_planes], shadowed[max_culled_planes][max_culled_lights];
 
-    TileCulling(const PacketCulling &culling, int x0, int x1, int y0, int y1) : c(culling) {
+    // `span`: the image points of all the tile's primary rays.
+    TileCulling(const PacketCulling &culling, const ImageSpan &span) : c(culling) {
         const int S = c.spheres;
-        seen.sort(c.seen.data(), S, x0, x1, y0, y1);
+        seen.sort(c.seen.data(), S, span);
         for (int k = 0; k < c.planes; ++k) {
-            mirrored[k].sort(c.mirrored.data() + k * S, S, x0, x1, y0, y1);
+            mirrored[k].sort(c.mirrored.data() + k * S, S, span);
             for (int l = 0; l < c.lights; ++l)
-                shadowed[k][l].sort(c.shadowed.data() + (k * c.lights + l) * S, S, x0, x1, y0, y1);
+                shadowed[k][l].sort(c.shadowed.data() + (k * c.lights + l) * S, S, span);
         }
     }
 };
 
-// A packet of primary rays through pixels [i0, i1) of row j: the spheres its rays cannot meet,
-// and, where every ray of it met plane k, those their reflections and their shadow rays to
-// light l cannot meet (bit s for sphere s).
+// A packet of primary rays through the image points of `span` (within its tile's): the spheres
+// its rays cannot meet, and, where every ray of it met plane k, those their reflections and
+// their shadow rays to light l cannot meet (bit s for sphere s).
 struct PrimaryPixels {
     const TileCulling &tile;
-    int i0, i1, j;
+    ImageSpan span;
 
     int planes() const { return tile.c.planes; }
     int lights() const { return tile.c.lights; }
-    unsigned seen() const { return tile.seen.packet_skip(tile.c.seen.data(), i0, i1, j); }
+    unsigned seen() const { return tile.seen.packet_skip(tile.c.seen.data(), span); }
     unsigned reflected(int k) const {
         const PixelRect *rects = tile.c.mirrored.data() + k * tile.c.spheres;
-        return tile.mirrored[k].packet_skip(rects, i0, i1, j);
+        return tile.mirrored[k].packet_skip(rects, span);
     }
     unsigned shadowed(int k, int l) const {
         const PixelRect *rects = tile.c.shadowed.data() + (k * tile.c.lights + l) * tile.c.spheres;
-        return tile.shadowed[k][l].packet_skip(rects, i0, i1, j);
+        return tile.shadowed[k][l].packet_skip(rects, span);
     }
 };
 
@@ -896,7 +909,7 @@ inline void render_tile_packets(const PacketCulling &culling, const Scene &scene
         // sky and floor packets skip all three spheres: 1.03x to 1.07x on one thread, 1.03x to
         // 1.05x on two (paired A/B, issue 12). The same for the floor's reflections and shadow
         // rays (PacketCulling).
-        const TileCulling tile(culling, x0, x1, y0, y1);
+        const TileCulling tile(culling, pixel_centres(x0, x1, y0, y1));
         // A row's primary rays are made before any of them is traced. Each normalisation is a
         // square root and then a division, some 50 cycles of latency, and made one packet at
         // a time the trace waited for it (the instructions after it held 9% of Ex 25's time,
@@ -910,7 +923,7 @@ inline void render_tile_packets(const PacketCulling &culling, const Scene &scene
                 const int n = std::min(rays_per_packet, x1 - i);
                 const Mask active = first_lanes(n);
                 counts.primary += uint64_t(n);
-                const PrimaryPixels pixels{tile, i, i + n, j};
+                const PrimaryPixels pixels{tile, pixel_centres(i, i + n, j, j + 1)};
                 const RayL rays = p < most ? row[p] : primary_rays(cam, i, j); // a wider tile
                 const ColorL c = trace(scene, rays, active, counts, &culling, &pixels);
                 store_pixels(out, cam.width, i, j, n, c);
@@ -918,16 +931,21 @@ inline void render_tile_packets(const PacketCulling &culling, const Scene &scene
         }
         return;
     }
+    // Several samples a pixel: packets of eight samples in order, each with the span of its
+    // samples' image points (every sample of pixel (i, j) lies in [i, i + 1) x [j, j + 1)).
     const int tile_w = x1 - x0;
     std::vector<Color> sums(size_t(tile_w) * size_t(y1 - y0));
+    const TileCulling tile(culling, ImageSpan{double(x0), double(x1), double(y0), double(y1)});
     RayL packet;
     int pixel[rays_per_packet], n = 0;
+    ImageSpan span{};
     auto flush = [&] {
         const Mask active = first_lanes(n);
         for (int k = n; k < rays_per_packet; ++k) // idle lanes: any harmless ray, masked off
             packet.o.x[k] = packet.o.y[k] = packet.o.z[k] = 0,
             packet.d.x[k] = packet.d.y[k] = 0, packet.d.z[k] = 1;
-        ColorL c = trace(scene, packet, active, counts, &culling, nullptr);
+        const PrimaryPixels samples{tile, span};
+        ColorL c = trace(scene, packet, active, counts, &culling, &samples);
         for (int k = 0; k < n; ++k) sums[size_t(pixel[k])] += Color{c.r[k], c.g[k], c.b[k]};
         n = 0;
     };
@@ -939,6 +957,10 @@ inline void render_tile_packets(const PacketCulling &culling, const Scene &scene
                 packet.o.x[n] = r.o.x, packet.o.y[n] = r.o.y, packet.o.z[n] = r.o.z;
                 packet.d.x[n] = r.d.x, packet.d.y[n] = r.d.y, packet.d.z[n] = r.d.z;
                 pixel[n] = (j - y0) * tile_w + (i - x0);
+                if (n == 0) span = {sx, sx, sy, sy};
+                else
+                    span = {std::min(span.x0, sx), std::max(span.x1, sx), std::min(span.y0, sy),
+                            std::max(span.y1, sy)};
                 if (++n == rays_per_packet) flush();
             });
     if (n > 0) flush();
