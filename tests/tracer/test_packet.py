@@ -377,3 +377,60 @@ def test_a_reflection_in_the_first_pixel_of_a_packet_of_samples(pixel):
     assert np.array_equal(a.image, b.image)
     assert a.rays == b.rays
     assert a.image[j, i].sum() > 0  # some sample of the pixel sees the reflection
+
+
+def random_scene(seed: int) -> dict:
+    """Spheres, planes and lights thrown at random around the origin, for the culling's corners:
+    a camera above or below the planes, tilted and axis-aligned planes, spheres resting on,
+    cutting or under them, tiny and large, lights below planes, inside spheres or level with
+    them, distant lights grazing a plane."""
+    rng = np.random.default_rng(seed)
+
+    def unit() -> list[float]:
+        v = rng.normal(size=3)
+        return (v / np.linalg.norm(v)).tolist()
+
+    def point(scale: float) -> list[float]:
+        return (rng.uniform(-scale, scale, size=3)).tolist()
+
+    planes = [plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], "a")]
+    for _ in range(int(rng.integers(0, 3))):
+        planes.append(plane(point(3.0), unit(), "b"))
+    spheres = []
+    for _ in range(int(rng.integers(2, 9))):
+        r = float(rng.choice([0.02, 0.3, 1.0, 2.5]))
+        c = point(4.0)
+        if rng.random() < 0.4:
+            c[1] = r * float(rng.choice([1.0, 0.5, -1.2]))  # on, through or under the floor
+        spheres.append(sphere(c, r, str(rng.choice(["a", "b"]))))
+    lights = []
+    for _ in range(int(rng.integers(1, 4))):
+        kind = rng.random()
+        if kind < 0.15:
+            c = spheres[0]["center"]
+            lights.append({"type": "point", "position": c})  # inside a sphere
+        elif kind < 0.6:
+            lights.append({"type": "point", "position": point(8.0)})
+        elif kind < 0.75:
+            lights.append({"type": "directional", "direction": [1.0, 0.0, 0.3]})  # grazing
+        else:
+            lights.append({"type": "directional", "direction": unit()})
+    eye = (np.array(unit()) * rng.uniform(6.0, 12.0)).tolist()
+    return scene_dict(
+        camera={"eye": eye, "look_at": point(1.0), "fov_y": 50.0, "width": 41, "height": 29},
+        render={"max_depth": 4, "spp": int(rng.choice([1, 1, 2])), "seed": seed},
+        materials={
+            "a": material(ambient=0.1, diffuse=0.6, specular=0.4, reflectivity=0.5),
+            "b": material(ambient=0.05, diffuse=0.4, reflectivity=0.9),
+        },
+        lights=lights,
+        objects=planes + spheres,
+    )
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_packets_equal_single_rays_on_random_scenes(seed):
+    a, b = both(tracer.load_scene(random_scene(seed)))
+    assert (a.integrator, b.integrator) == ("classic", "classic_packets")
+    assert np.array_equal(a.image, b.image), f"{int((a.image != b.image).sum())} values differ"
+    assert a.rays == b.rays
