@@ -206,6 +206,15 @@ inline Lanes plane_t(const Plane &pl, const RayL &ray) {
     // END SOLUTION
 }
 
+// The image points, in pixel units, that a set of rays passes through lie in [x0, x1] x [y0, y1].
+struct ImageSpan {
+    double x0, x1, y0, y1;
+};
+// The centres of the pixels of columns [i0, i1) and rows [j0, j1).
+inline ImageSpan pixel_centres(int i0, int i1, int j0, int j1) {
+    return {i0 + 0.5, i1 - 0.5, j0 + 0.5, j1 - 0.5};
+}
+
 // The pixels whose primary rays may meet a box: a rectangle of the image, in pixel units (pixel
 // (i, j) has its centre at (i + 0.5, j + 0.5)), or every pixel. A box wholly in front of the
 // eye (every corner at positive depth along `forward`; then the eye is outside it) is seen
@@ -217,15 +226,6 @@ inline Lanes plane_t(const Plane &pl, const RayL &ray) {
 // changes nothing. 81% of the bunny's 1920 x 1024 primary rays miss its box; their packets'
 // set-up (a normalisation and three divisions) was a tenth of the render (perf, issue 12).
 // The same holds for a sphere in its bounding box (render_tile_packets()).
-// The image points, in pixel units, that a set of rays passes through lie in [x0, x1] x [y0, y1].
-struct ImageSpan {
-    double x0, x1, y0, y1;
-};
-// The centres of the pixels of columns [i0, i1) and rows [j0, j1).
-inline ImageSpan pixel_centres(int i0, int i1, int j0, int j1) {
-    return {i0 + 0.5, i1 - 0.5, j0 + 0.5, j1 - 0.5};
-}
-
 struct PixelRect {
     double i_min = -infinity, i_max = infinity, j_min = -infinity, j_max = infinity;
 
@@ -238,6 +238,12 @@ struct PixelRect {
         return may_meet(pixel_centres(i0, i1, j0, j1));
     }
 };
+
+// A sphere's bounding box.
+inline AABB sphere_box(const Vec3 &centre, double radius) {
+    const Vec3 r{radius, radius, radius};
+    return {centre - r, centre + r};
+}
 
 // The box's eight corners projected at once, one per lane.
 inline PixelRect pixel_rect(const Camera &cam, const AABB &box) {
@@ -290,9 +296,8 @@ inline PixelRect pixel_rect(const Camera &cam, const AABB &box) {
 // are compared with the one-ray tracer's, bit for bit, tests/tracer/test_packet.py).
 inline PixelRect mirrored_rect(const Camera &cam, const Plane &pl, const Sphere &sp) {
     const Vec3 &n = pl.normal; // unit length
-    const Vec3 c = sp.center - n * (2 * dot(sp.center - pl.point, n));
-    const Vec3 r{sp.radius, sp.radius, sp.radius};
-    return pixel_rect(cam, AABB{c - r, c + r});
+    return pixel_rect(cam, sphere_box(sp.center - n * (2 * dot(sp.center - pl.point, n)),
+                                      sp.radius));
 }
 
 inline PixelRect shadow_rect(const Camera &cam, const Plane &pl, const Light &light,
@@ -306,11 +311,11 @@ inline PixelRect shadow_rect(const Camera &cam, const Plane &pl, const Light &li
     if (!(side != 0)) return PixelRect{}; // the light in (or along) the plane: no shadow to bound
     const Vec3 n = side > 0 ? pl.normal : -pl.normal;
     const double light_h = std::fabs(side); // a point light's height; for a distant one d.n
+    const AABB box = sphere_box(sp.center, sp.radius);
     AABB shadow;
-    for (int k = 0; k < 8; ++k) {
-        const Vec3 x{k & 1 ? sp.center.x + sp.radius : sp.center.x - sp.radius,
-                     k & 2 ? sp.center.y + sp.radius : sp.center.y - sp.radius,
-                     k & 4 ? sp.center.z + sp.radius : sp.center.z - sp.radius};
+    for (int k = 0; k < 8; ++k) { // corner k: the max on axis a where bit a of k is set
+        const Vec3 x{k & 1 ? box.max.x : box.min.x, k & 2 ? box.max.y : box.min.y,
+                     k & 4 ? box.max.z : box.min.z};
         const double h = dot(x - pl.point, n);
         if (point) {
             if (!(h < light_h * (1 - 1e-6))) return PixelRect{};
@@ -346,13 +351,14 @@ inline bool cannot_shadow(const Sphere &a, const Sphere &b, const Light &light) 
     return between > std::asin(a.radius / da) + std::asin(b.radius / db) + spare;
 }
 
-// The rectangles of a render (render_tile_packets()): for the first max_culled spheres, each
-// sphere's own (`seen`), its mirror image's in each of the first max_culled_planes planes, and
-// its shadow's on each of those planes from each of the first max_culled_lights lights. Built
-// once a render: a few hundred operations a rectangle.
 constexpr int max_culled = 32, max_culled_planes = 4, max_culled_lights = 8;
-// And for the points of each of those spheres, by each of those lights, the spheres that cannot
-// block their shadow rays (cannot_shadow(), bit b of unshadowing[a][l]), whatever ray met them.
+
+// What a render's packets may skip, built once a render (a few hundred operations a rectangle)
+// for the first max_culled spheres, max_culled_planes planes and max_culled_lights lights: the
+// image rectangles (render_tile_packets()) of each sphere (`seen`), of its mirror image in each
+// plane, and of its shadow on each plane from each light; and for the points of each sphere, by
+// each light, the spheres that cannot block their shadow rays (cannot_shadow(), bit b of
+// unshadowing[a][l]), whatever ray met them.
 struct PacketCulling {
     int spheres = 0, planes = 0, lights = 0;
     std::vector<PixelRect> seen, mirrored, shadowed; // [s], [k][s], [k][l][s]
@@ -365,8 +371,7 @@ struct PacketCulling {
         const Camera &cam = scene.camera;
         for (int s = 0; s < spheres; ++s) {
             const Sphere &sp = scene.spheres[size_t(s)];
-            const Vec3 r{sp.radius, sp.radius, sp.radius};
-            seen.push_back(pixel_rect(cam, AABB{sp.center - r, sp.center + r}));
+            seen.push_back(pixel_rect(cam, sphere_box(sp.center, sp.radius)));
         }
         for (int k = 0; k < planes; ++k)
             for (int s = 0; s < spheres; ++s)
@@ -573,14 +578,10 @@ inline HitL hit_record(const Scene &scene, const RayL &ray, const ClosestL &c, M
     h.material = Mask{};
     int64_t id = 0;
     for (const Sphere &s : scene.spheres) {
-        const Mask here = active & (c.id == id);
-        if (!any(here)) {
-            ++id;
-            continue;
-        }
-        if (id < max_culled) h.spheres_met |= 1u << id;
+        const Mask here = active & (c.id == id++);
+        if (!any(here)) continue;
+        if (id - 1 < max_culled) h.spheres_met |= 1u << (id - 1);
         else h.others_met = true;
-        ++id;
         centre = select(here, s.center, centre);
         radius = select(here, splat(s.radius), radius);
         is_sphere |= here;
