@@ -36,10 +36,15 @@ PACKET_SCENES = [p for p in CLASSIC if packets_serve(p)]
 OTHER_SCENES = [p for p in CLASSIC if not packets_serve(p)]
 
 
-def both(scene):
+def packets_agree(scene):
+    """Render the scene with both tracers; require that the two ran, and the same image and ray
+    counts. Returns the one-ray tracer's result."""
     a = tracer.render_with_stats(scene, threads=2, packets=False)
     b = tracer.render_with_stats(scene, threads=2, packets=True)
-    return a, b
+    assert (a.integrator, b.integrator) == ("classic", "classic_packets")
+    assert np.array_equal(a.image, b.image), f"{int((a.image != b.image).sum())} values differ"
+    assert a.rays == b.rays
+    return a
 
 
 def test_the_canonical_scenes_exercise_both_tracers():
@@ -53,10 +58,7 @@ def test_the_canonical_scenes_exercise_both_tracers():
 @pytest.mark.parametrize("spp", [1, 3])
 def test_packets_equal_single_rays(path, spp):
     scene = tracer.load_scene(path).with_overrides(width=97, height=61, spp=spp, seed=3)
-    a, b = both(scene)
-    assert (a.integrator, b.integrator) == ("classic", "classic_packets")
-    assert np.array_equal(a.image, b.image), f"{int((a.image != b.image).sum())} values differ"
-    assert a.rays == b.rays
+    packets_agree(scene)
 
 
 def test_power_of_a_packet_is_each_lanes_one_ray_power():
@@ -151,10 +153,7 @@ def test_packets_equal_single_rays_on_a_stiff_scene():
             sphere([c[0], c[1] - 1e6 - 1.0, c[2]], 1e6),
         ],
     )
-    a, b = both(tracer.load_scene(data))
-    assert (a.integrator, b.integrator) == ("classic", "classic_packets")
-    assert np.array_equal(a.image, b.image)
-    assert a.rays == b.rays
+    packets_agree(tracer.load_scene(data))
 
 
 @pytest.mark.parametrize("integrator", ["aov", "path"])
@@ -192,10 +191,7 @@ def test_a_sphere_seen_by_one_pixel(pixel, stereo):
     )
     data = scene_dict(camera=camera, materials={"m": material(ambient=1.0)},
                       objects=[sphere(list(centre), float(radius))])  # fmt: skip
-    a, b = both(tracer.load_scene(data))
-    assert (a.integrator, b.integrator) == ("classic", "classic_packets")
-    assert np.array_equal(a.image, b.image)
-    assert a.rays == b.rays
+    a = packets_agree(tracer.load_scene(data))
     lit = np.argwhere(a.image.sum(axis=-1) > 0).tolist()
     assert [j, i] in lit  # the left eye's (or the only) image, columns 0 to 36
     assert len(lit) <= 1 + stereo  # the right eye sees it once at most
@@ -212,16 +208,25 @@ FLOOR_CAMERA = {"eye": [0.0, 2.0, 6.0], "look_at": [0.0, 0.0, 0.0], "width": 37,
 FLOOR_PIXELS = [(0, 0), (36, 20), (7, 3), (8, 3), (15, 15), (16, 16)]
 
 
-def floor_hit(i: int, j: int, camera: dict = FLOOR_CAMERA) -> tuple[np.ndarray, np.ndarray, float]:
-    """The camera's unit ray direction through pixel (i, j)'s centre (the left eye's, for a
-    stereo pair), the point where it meets the floor y = 0, and a fifth of a pixel's width there
+def floor_hit(i: int, j: int, camera: dict = FLOOR_CAMERA) -> tuple[np.ndarray, ...]:
+    """The eye (the left one, for a stereo pair), its unit ray direction through pixel (i, j)'s
+    centre, the point where that ray meets the floor y = 0, and a fifth of a pixel's width there
     per unit distance."""
     cam = tracer.load_scene(scene_dict(camera=camera)).camera
     eye = left_eye(cam)[0]
     d = pixel_direction(cam, i + 0.5, j + 0.5)
     assert d[1] < 0  # every pixel sees the floor
     fifth = float(np.linalg.norm(pixel_direction(cam, i + 0.6, j + 0.5) - d))
-    return d, eye + d * (-eye[1] / d[1]), fifth
+    return eye, d, eye + d * (-eye[1] / d[1]), fifth
+
+
+def mirrored_sphere(i: int, j: int, fifths: float, camera: dict = FLOOR_CAMERA) -> dict:
+    """A sphere whose mirror image in the floor lies 3 past it on pixel (i, j)'s ray, `fifths`
+    fifths of a pixel in radius there: the pixel centre sees its reflection."""
+    eye, d, p, fifth = floor_hit(i, j, camera)
+    image = eye + d * (np.linalg.norm(p - eye) + 3.0)
+    centre = [float(image[0]), float(-image[1]), float(image[2])]
+    return sphere(centre, fifths * fifth * float(np.linalg.norm(image - eye)))
 
 
 @pytest.mark.parametrize("pixel", FLOOR_PIXELS)
@@ -231,21 +236,16 @@ def test_a_reflection_seen_by_one_pixel(pixel, stereo):
     camera = dict(FLOOR_CAMERA)
     if stereo:
         camera["stereo"] = {"eye_separation": 1.0, "convergence": 4.0, "layout": "side_by_side"}
-    d, p, fifth = floor_hit(i, j, camera)
-    eye = p - d * (-2.0 / d[1])  # the eye, 2 above the floor
-    image = eye + d * (np.linalg.norm(p - eye) + 3.0)  # the mirror image, 3 past the floor
-    centre = [float(image[0]), float(-image[1]), float(image[2])]
-    radius = fifth * float(np.linalg.norm(image - eye))
     data = scene_dict(
         camera=camera,
         render={"max_depth": 2},
         materials={"m": material(ambient=1.0), "mirror": material(reflectivity=1.0)},
-        objects=[plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], "mirror"), sphere(centre, radius)],
+        objects=[
+            plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], "mirror"),
+            mirrored_sphere(i, j, 1, camera),
+        ],
     )
-    a, b = both(tracer.load_scene(data))
-    assert (a.integrator, b.integrator) == ("classic", "classic_packets")
-    assert np.array_equal(a.image, b.image)
-    assert a.rays == b.rays
+    a = packets_agree(tracer.load_scene(data))
     assert a.image[j, i].sum() > 0  # the reflection, where the mirror image was put (left eye)
 
 
@@ -253,11 +253,10 @@ def test_a_reflection_seen_by_one_pixel(pixel, stereo):
 @pytest.mark.parametrize("light", ["point", "directional"])
 def test_a_shadow_seen_by_one_pixel(pixel, light):
     i, j = pixel
-    _, p, fifth = floor_hit(i, j)
+    eye, _, p, fifth = floor_hit(i, j)
     position = np.array([3.0, 5.0, 2.0])
     centre = p + 0.5 * (position - p)  # halfway to the light, on pixel (i, j)'s shadow ray
-    radius = fifth * float(np.linalg.norm(centre - left_eye(
-        tracer.load_scene(scene_dict(camera=FLOOR_CAMERA)).camera)[0]))  # fmt: skip
+    radius = fifth * float(np.linalg.norm(centre - eye))
     if light == "point":
         lamp = {"type": "point", "position": position.tolist()}
     else:
@@ -269,10 +268,7 @@ def test_a_shadow_seen_by_one_pixel(pixel, light):
         lights=[lamp],
         objects=[plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], "floor"), sphere(centre.tolist(), radius)],
     )
-    a, b = both(tracer.load_scene(data))
-    assert (a.integrator, b.integrator) == ("classic", "classic_packets")
-    assert np.array_equal(a.image, b.image)
-    assert a.rays == b.rays
+    a = packets_agree(tracer.load_scene(data))
     assert a.image[j, i].sum() == 0  # in the shadow
     assert (a.image.sum(axis=-1) > 0).mean() > 0.9  # and the floor around it lit
 
@@ -305,10 +301,7 @@ def test_packets_equal_single_rays_around_planes():
         ],
     )
     scene = tracer.load_scene(data).with_overrides(width=97, height=61)
-    a, b = both(scene)
-    assert (a.integrator, b.integrator) == ("classic", "classic_packets")
-    assert np.array_equal(a.image, b.image), f"{int((a.image != b.image).sum())} values differ"
-    assert a.rays == b.rays
+    packets_agree(scene)
 
 
 # Shadow rays from a packet's points on spheres skip the spheres that cannot shadow those
@@ -344,10 +337,7 @@ def test_a_sphere_shadowed_at_one_pixel(pixel, light):
         lights=[lamp],
         objects=[sphere([0.0, 0.0, 0.0], 1.0, "lit"), sphere(centre.tolist(), radius)],
     )
-    a, b2 = both(tracer.load_scene(data))
-    assert (a.integrator, b2.integrator) == ("classic", "classic_packets")
-    assert np.array_equal(a.image, b2.image)
-    assert a.rays == b2.rays
+    a = packets_agree(tracer.load_scene(data))
     assert a.image[j, i].sum() == 0  # in the small sphere's shadow
     assert a.image[j, i - 1].sum() > 0 and a.image[j, i + 1].sum() > 0  # its neighbours lit
 
@@ -361,21 +351,13 @@ def test_a_sphere_shadowed_at_one_pixel(pixel, light):
 @pytest.mark.parametrize("pixel", [(4, 3), (12, 10), (20, 17), (28, 6)])
 def test_a_reflection_in_the_first_pixel_of_a_packet_of_samples(pixel):
     i, j = pixel
-    d, p, fifth = floor_hit(i, j)
-    eye = p - d * (-2.0 / d[1])
-    image = eye + d * (np.linalg.norm(p - eye) + 3.0)
-    centre = [float(image[0]), float(-image[1]), float(image[2])]
-    radius = 4 * fifth * float(np.linalg.norm(image - eye))  # 0.4 pixel
     data = scene_dict(
         camera=FLOOR_CAMERA,
         render={"max_depth": 2, "spp": 2, "seed": 5},
         materials={"m": material(ambient=1.0), "mirror": material(reflectivity=1.0)},
-        objects=[plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], "mirror"), sphere(centre, radius)],
+        objects=[plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], "mirror"), mirrored_sphere(i, j, 4)],
     )
-    a, b = both(tracer.load_scene(data))
-    assert (a.integrator, b.integrator) == ("classic", "classic_packets")
-    assert np.array_equal(a.image, b.image)
-    assert a.rays == b.rays
+    a = packets_agree(tracer.load_scene(data))
     assert a.image[j, i].sum() > 0  # some sample of the pixel sees the reflection
 
 
@@ -430,7 +412,4 @@ def random_scene(seed: int) -> dict:
 
 @pytest.mark.parametrize("seed", range(40))
 def test_packets_equal_single_rays_on_random_scenes(seed):
-    a, b = both(tracer.load_scene(random_scene(seed)))
-    assert (a.integrator, b.integrator) == ("classic", "classic_packets")
-    assert np.array_equal(a.image, b.image), f"{int((a.image != b.image).sum())} values differ"
-    assert a.rays == b.rays
+    packets_agree(tracer.load_scene(random_scene(seed)))
