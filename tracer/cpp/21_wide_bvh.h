@@ -1097,23 +1097,30 @@ inline void interleaved_searches(const Mesh &mesh, size_t start, size_t end, Mak
         ++live;
     };
     for (int k = 0; k < in_flight; ++k) begin(k);
+    auto retire = [&](int k) { // the search in slot k is over: its answer written out
+        const Search &done = *slot[k];
+        const size_t r = ray_of[k];
+        const int t = done.best_triangle;
+        t_out[r] = done.found ? done.best.t : infinity;
+        object_out[r] = !done.found ? -1
+                        : mesh.triangle_object.empty() ? mesh.object
+                                                       : mesh.triangle_object[size_t(t)];
+        triangle_out[r] = done.found ? t : -1;
+        counts.box_tests += done.box_tests;
+        counts.primitive_tests += done.primitive_tests;
+        slot[k].reset();
+        --live;
+    };
+    // A ray that takes the place of one that is over takes its first step (the root, always in
+    // the cache) in the same turn: 1.01x to 1.03x on 1 thread, 1.03x to 1.06x on 2 (the bunny's
+    // 2M incoherent rays, medians of 4 to 11 alternating rounds, near the machine's noise;
+    // issue 12): one turn fewer a ray.
     while (live > 0)
-        for (int k = 0; k < in_flight; ++k) {
-            if (!slot[k] || slot[k]->step()) continue;
-            const Search &done = *slot[k];
-            const size_t r = ray_of[k];
-            const int t = done.best_triangle;
-            t_out[r] = done.found ? done.best.t : infinity;
-            object_out[r] = !done.found ? -1
-                            : mesh.triangle_object.empty() ? mesh.object
-                                                           : mesh.triangle_object[size_t(t)];
-            triangle_out[r] = done.found ? t : -1;
-            counts.box_tests += done.box_tests;
-            counts.primitive_tests += done.primitive_tests;
-            slot[k].reset();
-            --live;
-            begin(k);
-        }
+        for (int k = 0; k < in_flight; ++k)
+            while (slot[k] && !slot[k]->step()) {
+                retire(k);
+                begin(k);
+            }
 }
 
 // The wide hierarchy of a mesh built with Acceleration::bvh (none for the other kinds, which
