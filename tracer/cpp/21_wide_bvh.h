@@ -948,7 +948,7 @@ template <class Block> struct Search8 {
     // children mix the two unpredictably, and the sixteen rays taking turns overlap only where
     // their branches are foreseen. The address is chosen by masks, not by `leaf ? a : b`, which
     // GCC 12 compiled as a jump on the code's sign bit for every child asked for (Clang as a
-    // conditional move): the bunny's incoherent rays took 1.11x as long (issue 12). A line that
+    // conditional move): the bunny's incoherent rays took 1.10x as long (issue 12). A line that
     // only a TriangleBlock has is asked for in a node as a repeat of its first. Two lines of an
     // IndexBlock: the second is the leaf's next block, if it has one.
     void prefetch(uint32_t code) const {
