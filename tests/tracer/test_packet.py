@@ -171,6 +171,15 @@ def test_other_integrators_report_themselves(integrator):
         assert result.integrator == expected
 
 
+def pixel_ray(i: int, j: int, camera: dict) -> tuple[np.ndarray, np.ndarray, float]:
+    """The eye (the left one, for a stereo pair), its unit ray direction through pixel (i, j)'s
+    centre, and a fifth of a pixel's width per unit distance along it."""
+    cam = tracer.load_scene(scene_dict(camera=camera)).camera
+    d = pixel_direction(cam, i + 0.5, j + 0.5)
+    fifth = float(np.linalg.norm(pixel_direction(cam, i + 0.6, j + 0.5) - d))
+    return left_eye(cam)[0], d, fifth
+
+
 # A packet of primary rays skips the spheres whose bounding box's image rectangle holds none of
 # its pixels (12_packet.h pixel_rect(), two pixels of margin): those rays would miss them. A
 # sphere a fifth of a pixel across, seen by the one pixel centre it covers, at the image's
@@ -182,15 +191,10 @@ def test_a_sphere_seen_by_one_pixel(pixel, stereo):
     camera = {"width": 37, "height": 21}
     if stereo:
         camera["stereo"] = {"eye_separation": 1.0, "convergence": 2.0, "layout": "side_by_side"}
-    base = tracer.load_scene(scene_dict(camera=camera, materials={"m": material(ambient=1.0)}))
     i, j = pixel
-    cam = base.camera
-    centre = left_eye(cam)[0] + 10 * pixel_direction(cam, i + 0.5, j + 0.5)
-    radius = 10 * np.linalg.norm(
-        pixel_direction(cam, i + 0.6, j + 0.5) - pixel_direction(cam, i + 0.5, j + 0.5)
-    )
+    eye, d, fifth = pixel_ray(i, j, camera)
     data = scene_dict(camera=camera, materials={"m": material(ambient=1.0)},
-                      objects=[sphere(list(centre), float(radius))])  # fmt: skip
+                      objects=[sphere(list(eye + 10 * d), 10 * fifth)])  # fmt: skip
     a = packets_agree(tracer.load_scene(data))
     lit = np.argwhere(a.image.sum(axis=-1) > 0).tolist()
     assert [j, i] in lit  # the left eye's (or the only) image, columns 0 to 36
@@ -209,15 +213,18 @@ FLOOR_PIXELS = [(0, 0), (36, 20), (7, 3), (8, 3), (15, 15), (16, 16)]
 
 
 def floor_hit(i: int, j: int, camera: dict = FLOOR_CAMERA) -> tuple[np.ndarray, ...]:
-    """The eye (the left one, for a stereo pair), its unit ray direction through pixel (i, j)'s
-    centre, the point where that ray meets the floor y = 0, and a fifth of a pixel's width there
-    per unit distance."""
-    cam = tracer.load_scene(scene_dict(camera=camera)).camera
-    eye = left_eye(cam)[0]
-    d = pixel_direction(cam, i + 0.5, j + 0.5)
+    """pixel_ray()'s eye and direction, the point where that ray meets the floor y = 0, and
+    pixel_ray()'s fifth of a pixel."""
+    eye, d, fifth = pixel_ray(i, j, camera)
     assert d[1] < 0  # every pixel sees the floor
-    fifth = float(np.linalg.norm(pixel_direction(cam, i + 0.6, j + 0.5) - d))
     return eye, d, eye + d * (-eye[1] / d[1]), fifth
+
+
+def light_at(kind: str, position: np.ndarray, toward: np.ndarray) -> dict:
+    """A point light at `position`, or a distant one shining from it towards `toward`."""
+    if kind == "point":
+        return {"type": "point", "position": position.tolist()}
+    return {"type": "directional", "direction": (toward - position).tolist()}
 
 
 def mirrored_sphere(i: int, j: int, fifths: float, camera: dict = FLOOR_CAMERA) -> dict:
@@ -257,15 +264,11 @@ def test_a_shadow_seen_by_one_pixel(pixel, light):
     position = np.array([3.0, 5.0, 2.0])
     centre = p + 0.5 * (position - p)  # halfway to the light, on pixel (i, j)'s shadow ray
     radius = fifth * float(np.linalg.norm(centre - eye))
-    if light == "point":
-        lamp = {"type": "point", "position": position.tolist()}
-    else:
-        lamp = {"type": "directional", "direction": (p - position).tolist()}
     data = scene_dict(
         camera=FLOOR_CAMERA,
         render={"max_depth": 1},
         materials={"m": material(), "floor": material(diffuse=1.0)},
-        lights=[lamp],
+        lights=[light_at(light, position, p)],
         objects=[plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], "floor"), sphere(centre.tolist(), radius)],
     )
     a = packets_agree(tracer.load_scene(data))
@@ -313,10 +316,8 @@ def test_packets_equal_single_rays_around_planes():
 @pytest.mark.parametrize("light", ["point", "directional"])
 def test_a_sphere_shadowed_at_one_pixel(pixel, light):
     camera = {"width": 37, "height": 21}
-    cam = tracer.load_scene(scene_dict(camera=camera)).camera
-    eye = left_eye(cam)[0]
     i, j = pixel
-    d = pixel_direction(cam, i + 0.5, j + 0.5)
+    eye, d, fifth = pixel_ray(i, j, camera)
     b = float(np.dot(eye, d))  # the unit sphere at the origin: t^2 + 2 b t + |eye|^2 - 1 = 0
     disc = b * b - (float(np.dot(eye, eye)) - 1.0)
     assert disc > 0  # the pixel sees the big sphere
@@ -324,17 +325,12 @@ def test_a_sphere_shadowed_at_one_pixel(pixel, light):
     position = np.array([3.0, 4.0, 5.0])
     assert np.dot(x, position - x) > 0  # and its point faces the light
     centre = x + 0.5 * (position - x)
-    fifth = float(np.linalg.norm(pixel_direction(cam, i + 0.6, j + 0.5) - d))
     radius = 0.5 * fifth * float(np.linalg.norm(x - eye))  # its shadow: a fifth of a pixel
-    if light == "point":
-        lamp = {"type": "point", "position": position.tolist()}
-    else:
-        lamp = {"type": "directional", "direction": (x - position).tolist()}
     data = scene_dict(
         camera=camera,
         render={"max_depth": 1},
         materials={"m": material(), "lit": material(diffuse=1.0)},
-        lights=[lamp],
+        lights=[light_at(light, position, x)],
         objects=[sphere([0.0, 0.0, 0.0], 1.0, "lit"), sphere(centre.tolist(), radius)],
     )
     a = packets_agree(tracer.load_scene(data))
