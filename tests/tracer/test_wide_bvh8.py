@@ -154,3 +154,46 @@ def test_a_box_beyond_floats_range_falls_back_to_the_four_wide_tree():
     core = _core_of(vertices, faces)
     origins, directions = diffuse_rays(mesh.vertices, mesh.faces, 20_000, seed=3)
     _agree(core, origins, directions)
+
+
+@pytest.mark.parametrize(
+    "direction",
+    # zero components (1/d infinite), a tiny one (1/d beyond 2^100), a small one (1/d 1e12: from
+    # 1e8 away beyond 2^64 times the reach), and a plain slanted ray for contrast
+    [
+        (0.0, 0.0, -1.0),
+        (1.0, 0.0, 0.0),
+        (0.0, -1.0, 0.0),
+        (0.6, 0.0, -0.8),
+        (1e-32, 0.6, -0.8),
+        (1e-12, 0.6, -0.8),
+        (0.3, -0.5, 0.8),
+    ],
+)
+@pytest.mark.parametrize("distance", [1.0, 1e8])
+def test_rays_the_float_node_test_cannot_take_agree(direction, distance):
+    """Search8 tests a node's boxes in float (21_wide_bvh.h float_slab_test8()) only where the
+    ray's 1/d lies within 2^-100 to 2^100 on every axis and its origin is not far beyond the
+    tree (2^64 times its reach); other rays are tested in double as the lecture does. Rays
+    parallel to an axis or a plane, nearly so, from near and from 1e8 away (where a double's
+    step is 1.5e-8, a ten-millionth of the bunny), aimed at triangle centroids."""
+    mesh, core = _bunny_core(1.0)
+    vertices, faces = np.asarray(mesh.vertices), np.asarray(mesh.faces)
+    rng = np.random.default_rng(13)
+    targets = np.mean(vertices[faces[rng.integers(0, len(faces), 4000)]], axis=1)
+    d = np.tile(np.asarray(direction, dtype=np.float64), (len(targets), 1))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    _agree(core, targets - distance * d, d, most_hit=True)
+
+
+def test_a_ray_whose_float_node_test_would_overflow_agrees():
+    """The grid of quads at z = 1e8, 3e3 across (a node's step in x is about 12), met by rays
+    whose x component is 1e-36: in float, 1/d (1e36) times a node's step times a q of 255 is
+    beyond float's range, an infinite entry t that would lose the box. Such a ray (1/d beyond
+    2^100) is tested in double."""
+    vertices, faces = _grid((-2.5, 4.0, 1e8), 3e3, lift=16.0)
+    core = _core_of(vertices, faces)
+    rng = np.random.default_rng(17)
+    targets = np.mean(vertices[faces[rng.integers(0, len(faces), 4000)]], axis=1)
+    d = np.tile([1e-36, 0.6, -0.8], (len(targets), 1))
+    _agree(core, targets - 10.0 * d, d, most_hit=True)

@@ -19,12 +19,12 @@
 //   one-ray code's.
 //
 // - A mesh that is not flat (more than one wide node) is searched in an eight-wide tree
-//   collapsed the same way instead (Search8 below: one AVX-512 register of 8 doubles per slab
-//   plane, children ordered by a bitonic sort of integer keys), its boxes stored in 8 bits a
-//   plane against a node's own frame (QNode8) and, where every vertex is a float, its leaves
-//   as the indices of their corners (IndexBlock): boxes that contain the lecture's boxes, in a
-//   shallower tree, and the same triangle tests, so the same answers, in fewer, cheaper steps
-//   from less memory (issue 12).
+//   collapsed the same way instead (Search8 below: the eight boxes tested at once, in float
+//   where that decides as the double test does, children ordered by a bitonic sort of integer
+//   keys), its boxes stored in 8 bits a plane against a node's own frame (QNode8) and, where
+//   every vertex is a float, its leaves as the indices of their corners (IndexBlock): boxes
+//   that contain the lecture's boxes, in a shallower tree, and the same triangle tests, so the
+//   same answers, in fewer, cheaper steps from less memory (issue 12).
 //
 // What may differ from Mesh::traverse() is only the order in which leaves are visited (nearest
 // child box first, among four instead of two). Where two triangles are hit at the same t (an
@@ -229,8 +229,9 @@ inline M4 triangle_candidates(const TriangleBlock &block, const WatertightRay &r
 // through the bunny visited 12 four-wide nodes, each one step of fixed cost (the node's set-up,
 // its children's order, a return to the scheduler), and was bound by that cost rather than by
 // memory (the same rays took as long with every node already in cache). Eight children's boxes
-// are one AVX-512 register of 8 doubles per slab plane; on a machine without AVX-512 the
-// compiler splits each vector in two (AVX2) or four (SSE2), the same arithmetic.
+// are one AVX-512 register of 8 doubles per slab plane (slab_test8()), or one AVX register of
+// 8 floats (float_slab_test8()); on a machine without AVX-512 the compiler splits each vector
+// of doubles in two (AVX2) or four (SSE2), the same arithmetic.
 constexpr int bvh8_width = 8;
 typedef double D8 __attribute__((vector_size(bvh8_width * sizeof(double))));
 typedef float F8 __attribute__((vector_size(bvh8_width * sizeof(float))));
@@ -493,7 +494,17 @@ inline M8 slab_test8(const QNode8 &node, const SlabRay &r, const Interval &range
     // END SOLUTION
 }
 
-// The lanes of a mask as bits (lane k: bit k).
+// The lanes of a mask as bits (lane k: bit k), of 8 doubles' lanes or 8 floats'.
+typedef int32_t M8F __attribute__((vector_size(bvh8_width * sizeof(int32_t))));
+inline unsigned lane_bits8(M8F m) {
+#if defined(__AVX__)
+    return unsigned(_mm256_movemask_ps(bit_cast<__m256>(m)));
+#else
+    unsigned b = 0;
+    for (int k = 0; k < bvh8_width; ++k) b |= unsigned(m[k] != 0) << k;
+    return b;
+#endif
+}
 inline unsigned lane_bits8(M8 m) {
 #if defined(__AVX512DQ__)
     return _mm512_movepi64_mask(bit_cast<__m512i>(m));
@@ -518,6 +529,154 @@ inline U8 float_bits_down(D8 t) {
     const F8 f = __builtin_convertvector(t, F8); // to nearest, then one step down where above
     const M8 above = __builtin_convertvector(f, D8) > t;
     return bit_cast<U8>(f) + __builtin_convertvector(above, U8); // true is -1: one ulp down
+#endif
+}
+
+// -- The eight children's slab test in float (issue 12) ----------------------------------
+// slab_test8() converts each plane to double and runs slab_test()'s arithmetic on eight
+// doubles: under AVX-512 that is 512-bit work, which Zen 4 does in two halves, and on every
+// machine a chain of conversions before the children's order is known. float_slab_test8()
+// tests the same boxes in float, a plane's t in one multiply-add from its 8-bit q: the plane
+// read back is fma(q, scale, origin) (dequantize()), so t = (plane - o) / d = q A + B, with
+// A = scale / d and B = (origin - o) / d two numbers per axis a node (Ylitie, Karras and Laine
+// 2017 test their compressed nodes so). It decides exactly what slab_test8() decides (below),
+// so the search visits the same nodes; only its keys (entry t in float, rounded down further)
+// may order two children of nearly equal entry otherwise, and keep for a leaf on the stack a
+// t a little lower (a leaf so kept whose triangle is then hit is one tied with the best hit
+// to rounding, as between any two searches). The bunny's incoherent rays 1.08x faster on one
+// thread (Zen 4, 2M rays, alternating builds, every hit the same).
+//
+// The bound. Let u = 2^-24 (float's unit roundoff), i = 1/d on one axis rounded to float, P
+// the largest |plane| of the tree on that axis (WideBVH::plane_bound) and R = (P + |o|) |i|.
+// A = fl(scale i), B = fl(fma(origin, i, c)) and t = fl(fma(q, A, B)) round once each; q
+// scale is plane - origin (but for the plane's rounding), at most 2P, and origin i and c = -o i
+// are at most R, so A's rounding adds at most 2 u R, B's u R, t's 3 u R, the plane's own
+// rounding in dequantize() u R and i's u R: the computed t is within 8 u R of the exact
+// (plane - o) / d. The near planes take c lowered by e = 16 u R (plus 2^-120: an underflow's
+// error is absolute, below 2^-140 here) and rounded down, the far planes c raised by e and
+// rounded up, the range's ends are rounded outward: each near t lies between the exact one
+// and 2e below it, each far t between the exact one and 2e above. So the window [lo, hi]
+// found contains the exact one, and so the double test's (which is within 2 gamma(3) of the
+// exact one, far inside 7 u R): a child the float test misses, the double test misses. A child
+// whose window is at least 5 max(e, range's rounding) wide has a non-empty exact window,
+// which the double test never misses; the rare child met by a narrower window (a ray grazing
+// its box, a box flat on one axis: 1% of the bunny's nodes) is asked of slab_test8().
+// That needs every number finite and no float overflow, nor i lost to subnormals: a ray with
+// 1/d beyond 2^100 or below 2^-100 on an axis (a zero component: 1/d infinite), or R above
+// 2^64, is tested in double only.
+constexpr float float_slab_margin = 0x1p-20f; // 16 u
+
+// x rounded to float downward (mode _MM_FROUND_TO_NEG_INF) or upward (_MM_FROUND_TO_POS_INF):
+// AVX-512's conversion with its rounding given, else float_down() and float_up().
+template <int mode> inline float to_float_rounded(double x) {
+#if defined(__AVX512F__)
+    return _mm_cvtss_f32(
+        _mm_cvt_roundsd_ss(_mm_setzero_ps(), _mm_set_sd(x), mode | _MM_FROUND_NO_EXC));
+#else
+    static_assert(mode == _MM_FROUND_TO_NEG_INF || mode == _MM_FROUND_TO_POS_INF);
+    return mode == _MM_FROUND_TO_NEG_INF ? float_down(x) : float_up(x);
+#endif
+}
+
+// a b + c, rounded once, per lane, for eight floats.
+inline F8 fma(F8 a, F8 b, F8 c) {
+#if defined(__AVX__) && defined(__FMA__)
+    return bit_cast<F8>(_mm256_fmadd_ps(bit_cast<__m256>(a), bit_cast<__m256>(b),
+                                        bit_cast<__m256>(c)));
+#else
+    F8 r;
+    for (int k = 0; k < bvh8_width; ++k) r[k] = std::fma(a[k], b[k], c[k]);
+    return r;
+#endif
+}
+
+// Eight q (one plane of a node, 8 bits a child) as floats.
+inline F8 q_lanes(const uint8_t *q) {
+#if defined(__AVX2__)
+    const __m128i q8 = _mm_loadl_epi64(reinterpret_cast<const __m128i *>(q));
+    return bit_cast<F8>(_mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(q8)));
+#else
+    F8 f;
+    for (int c = 0; c < bvh8_width; ++c) f[c] = float(q[c]);
+    return f;
+#endif
+}
+
+// A ray's numbers for float_slab_test8(), per axis: i = 1/d in float, and c = -o i lowered
+// (near) and raised (far) by the margin e; where each plane's q lies in QNode8::q (its byte
+// offset, near and far side as slab_test() picks them); the range's start rounded down.
+// `usable`: false where the bounds above do not hold (the ray is tested in double).
+struct FloatSlabRay {
+    float inv[3], near_c[3], far_c[3];
+    int q_near[3], q_far[3];
+    float min_t;   // range.min rounded down
+    double margin; // the largest of the three axes' margins e (see above)
+    bool usable = true;
+
+    FloatSlabRay(const SlabRay &r, const float plane_bound[3], const Interval &range)
+        : min_t(to_float_rounded<_MM_FROUND_TO_NEG_INF>(range.min)), margin(0) {
+        const int near[3] = {r.near_x, r.near_y, r.near_z};
+        for (int a = 0; a < 3; ++a) {
+            const float i = float(r.inv_d[a]);
+            const double reach = (double(plane_bound[a]) + std::fabs(r.o[a])) * std::fabs(i);
+            // (false for NaN too)
+            usable = usable && std::fabs(i) >= 0x1p-100f && std::fabs(i) <= 0x1p100f &&
+                     reach <= 0x1p64;
+            const double e = double(float_slab_margin) * reach + 0x1p-120;
+            margin = std::max(margin, e);
+            const double c = -r.o[a] * double(i);
+            inv[a] = i;
+            near_c[a] = to_float_rounded<_MM_FROUND_TO_NEG_INF>(c - e);
+            far_c[a] = to_float_rounded<_MM_FROUND_TO_POS_INF>(c + e);
+            constexpr int side = sizeof(QNode8::q[0]), axis = sizeof(QNode8::q[0][0]);
+            q_near[a] = near[a] * side + a * axis;
+            q_far[a] = (1 - near[a]) * side + a * axis;
+        }
+    }
+
+    // The width from which a window found is surely not empty in exact arithmetic: the near
+    // and far ends each move by at most 2 e, or by the range's rounding to float (2^-23 of it).
+    float sure_width(const Interval &range) const {
+        double m = std::max(margin, 0x1p-23 * range.min);
+        if (std::isfinite(range.max)) m = std::max(m, 0x1p-23 * range.max);
+        return to_float_rounded<_MM_FROUND_TO_POS_INF>(5 * m);
+    }
+};
+
+// The children a ray meets within [min_t, max_t] (bit c for child c; max_t: range.max rounded
+// up), each one's entry t (at or before the exact one) as its float's bits in t_near; `unsure`:
+// those of them whose window is narrower than sure_width (for slab_test8() to decide).
+inline unsigned float_slab_test8(const QNode8 &node, const FloatSlabRay &r, float max_t,
+                                 float sure_width, U8 &t_near, unsigned &unsure) {
+    F8 lo = F8{} + r.min_t, hi = F8{} + max_t;
+    const uint8_t *q = &node.q[0][0][0];
+    for (int a = 0; a < 3; ++a) {
+        const F8 A = F8{} + node.scale[a] * r.inv[a];
+        const F8 low_b = F8{} + std::fma(node.origin[a], r.inv[a], r.near_c[a]);
+        const F8 high_b = F8{} + std::fma(node.origin[a], r.inv[a], r.far_c[a]);
+        const F8 q0 = q_lanes(q + r.q_near[a]), q1 = q_lanes(q + r.q_far[a]);
+        const F8 t0 = fma(q0, A, low_b), t1 = fma(q1, A, high_b);
+        lo = t0 > lo ? t0 : lo, hi = t1 < hi ? t1 : hi;
+    }
+    t_near = bit_cast<U8>(lo); // lo >= min_t >= 0: its bits order as its values
+    const unsigned met = lane_bits8(lo <= hi) & node.valid;
+    unsure = met & ~lane_bits8(hi - lo >= F8{} + sure_width);
+    return met;
+}
+
+// A search key per child (t_near's bits above its code), 0 for a child not in `bits`.
+inline K8 search_keys(const U8 &t_near, const uint32_t child[bvh8_width], unsigned bits) {
+#if defined(__AVX512F__)
+    const __m512i t = _mm512_cvtepu32_epi64(bit_cast<__m256i>(t_near));
+    const __m512i code =
+        _mm512_cvtepu32_epi64(_mm256_loadu_si256(reinterpret_cast<const __m256i *>(child)));
+    return bit_cast<K8>(
+        _mm512_maskz_mov_epi64(__mmask8(bits), _mm512_or_si512(_mm512_slli_epi64(t, 32), code)));
+#else
+    K8 keys;
+    for (int c = 0; c < bvh8_width; ++c)
+        keys[c] = bits >> c & 1 ? uint64_t(t_near[c]) << 32 | child[c] : 0;
+    return keys;
 #endif
 }
 
@@ -616,6 +775,7 @@ struct WideBVH : MeshAccelerator {
     HugeVector<IndexBlock> index_blocks;     // or for a mesh of floats (float_vertices)
     HugeVector<float> vertex_floats;         // their corners: x, y, z, 0 a vertex
     bool float_vertices = false;
+    float plane_bound[3] = {0, 0, 0}; // per axis: no plane read back lies farther from 0
     std::vector<Node8> build_nodes8;         // the tree as collapsed, before quantize()
     std::vector<int> vertex_slot;            // a vertex's corner index (4 x its place in the copy)
 
@@ -656,6 +816,11 @@ struct WideBVH : MeshAccelerator {
             quantised = quantize(build_nodes8[k], nodes8[k]);
         build_nodes8 = {}, vertex_slot = {};
         if (!quantised) nodes8 = {}, double_blocks = {}, index_blocks = {}, vertex_floats = {};
+        for (const QNode8 &node : nodes8)
+            for (int axis = 0; axis < 3; ++axis)
+                plane_bound[axis] = std::max(
+                    {plane_bound[axis], std::fabs(node.origin[axis]),
+                     std::fabs(dequantize(255, node.scale[axis], node.origin[axis]))});
         return quantised;
     }
 
@@ -928,6 +1093,8 @@ template <class Block> struct Search8 {
     const SlabRay sr;
     Interval range;
     const bool any;
+    const FloatSlabRay fr;
+    float max_t, sure_width; // range.max rounded up to float; see float_slab_test8()
     uint32_t next = 0; // the child to visit next (0: pop one from the stack)
     int top = 0;
     TriangleHit best{};
@@ -940,7 +1107,10 @@ template <class Block> struct Search8 {
 
     Search8(const WideBVH &bvh, const Block *blocks, const Mesh &mesh, const Ray &ray,
             Interval range, bool any)
-        : bvh(bvh), blocks(blocks), mesh(mesh), wr(ray), sr(ray), range(range), any(any) {
+        : bvh(bvh), blocks(blocks), mesh(mesh), wr(ray), sr(ray), range(range), any(any),
+          fr(sr, bvh.plane_bound, range),
+          max_t(to_float_rounded<_MM_FROUND_TO_POS_INF>(range.max)),
+          sure_width(fr.sure_width(range)) {
         stack[top++] = 0; // the root, entered at t >= 0
     }
 
@@ -1012,17 +1182,40 @@ template <class Block> struct Search8 {
             }
             if (hit) {
                 found = true;
+                max_t = to_float_rounded<_MM_FROUND_TO_POS_INF>(range.max);
+                sure_width = fr.sure_width(range);
                 if (any) return top = 0, false;
             }
         }
         return top > 0;
     }
 
+    // slab_test8()'s answer, for the few children float_slab_test8() leaves unsure: out of
+    // line, so that the search's loop keeps its registers for the usual case.
+    [[gnu::noinline, gnu::cold]] unsigned double_test(const QNode8 &node) const {
+        D8 t;
+        return lane_bits8(slab_test8(node, sr, range, t));
+    }
+
+    // The children met, as slab_test8() decides, in float where the ray allows it
+    // (float_slab_test8()), with their entry t's float bits (at or below the entry t).
+    unsigned children_met(const QNode8 &node, U8 &t_near) const {
+        D8 t;
+        if (fr.usable) {
+            unsigned unsure;
+            const unsigned met = float_slab_test8(node, fr, max_t, sure_width, t_near, unsure);
+            if (__builtin_expect(unsure == 0, 1)) return met;
+            return (met & ~unsure) | (double_test(node) & unsure);
+        }
+        const unsigned met = lane_bits8(slab_test8(node, sr, range, t));
+        t_near = float_bits_down(t);
+        return met;
+    }
+
     void node(uint32_t index) {
         const QNode8 &node = bvh.nodes8[index];
-        D8 t_near;
-        const M8 hit = slab_test8(node, sr, range, t_near);
-        const unsigned bits = lane_bits8(hit);
+        U8 t_near;
+        const unsigned bits = children_met(node, t_near);
         box_tests += bvh8_width; // (lanes without a child count too: the same instruction)
         if (bits == 0) return;
         if ((bits & (bits - 1)) == 0) { // one child: next, no key
@@ -1030,9 +1223,7 @@ template <class Block> struct Search8 {
             prefetch(next);
             return;
         }
-        const K8 keys = (__builtin_convertvector(float_bits_down(t_near), K8) << 32 |
-                         __builtin_convertvector(bit_cast<U8>(node.child), K8)) &
-                        bit_cast<K8>(hit);
+        const K8 keys = search_keys(t_near, node.child, bits);
         if (__builtin_popcount(bits) == 2) { // two: one compare, not the six layers of the sort
             const uint64_t a = keys[__builtin_ctz(bits)], b = keys[31 - __builtin_clz(bits)];
             const uint64_t far = a > b ? a : b, near = a > b ? b : a;
