@@ -79,7 +79,8 @@ DECLARATION = re.compile(
     r"|^(?:inline |static )?constexpr\s+[\w:<>]+\s+(\w+)\s*[={]"
     r"|^typedef\b[^;]*?\b(\w+)\s*(?:__attribute__|;)"
     r"|^using\s+(\w+)\s*="
-    r"|^(?:template\s*<[^>]*>\s*)?inline\s+(?:const\s+)?[\w:<>]+[\s&*]+(\w+)\s*\(",
+    # (an attribute may come first: [[gnu::always_inline]] inline ...)
+    r"|^(?:template\s*<[^>]*>\s*)?(?:\[\[[^\]]*\]\]\s*)?inline\s+(?:const\s+)?[\w:<>]+[\s&*]+(\w+)\s*\(",
     re.M,
 )
 
