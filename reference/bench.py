@@ -240,8 +240,9 @@ def suite_geometry(
     robust=False, float): ``bunny-primary``, the camera's primary rays (rtlab's aov
     integrator); ``bunny-diffuse``, ``diffuse`` incoherent rays leaving the bunny's surface
     (diffuse_rays(); rtlab's batch call closest_mesh_hits, Embree the same rays in float32,
-    their origins offset for float32: diffuse_rays_float32(); its rows' ``agreement``: the
-    fraction of rays on which Embree found rtlab's closest triangle, or none where rtlab did);
+    their origins offset for float32: diffuse_rays_float32()); Embree's rows of both carry
+    ``agreement``, the fraction of its rays on which Embree found the closest triangle rtlab
+    finds for them, or none where rtlab finds none;
     plus each one's hierarchy build time."""
     import dataclasses
     import threading
@@ -301,12 +302,22 @@ def suite_geometry(
     primary_o, primary_d = _camera_rays(bunny_only)
     diffuse_o, diffuse_d = diffuse_rays(mesh.vertices, mesh.faces, diffuse)
     diffuse_f32 = diffuse_rays_float32(mesh.vertices, mesh.faces, diffuse)
-    # Whether Embree answers these rays as rtlab does (the same work, timed): the closest
-    # triangle of each, once, outside the timing.
-    diffuse_agreement = agreement(
-        _core.closest_mesh_hits(core, diffuse_o, diffuse_d, default_threads())[2],
-        embree.run(*diffuse_f32, query="INTERSECT", output=1)["primID"],
-    )
+
+    def embree_agreement(
+        ours: tuple[np.ndarray, np.ndarray], theirs: tuple[np.ndarray, ...]
+    ) -> float:
+        """Whether Embree answers its rays as rtlab answers the same rays (the same work,
+        timed): each one's closest triangle, once, outside the timing."""
+        triangles = _core.closest_mesh_hits(core, *ours, default_threads())[2]
+        return agreement(triangles, embree.run(*theirs, query="INTERSECT", output=1)["primID"])
+
+    agreements = {
+        # The camera's rays as Embree gets them, widened back to float64 (exactly) for rtlab.
+        "bunny-primary": embree_agreement(
+            (primary_o.astype(np.float64), primary_d.astype(np.float64)), (primary_o, primary_d)
+        ),
+        "bunny-diffuse": embree_agreement((diffuse_o, diffuse_d), diffuse_f32),
+    }
     cases = (
         ("bunny-primary", width * height,
          lambda n: render_with_stats(bunny_only, threads=n, progress=False).seconds,
@@ -327,8 +338,8 @@ def suite_geometry(
                 rows.append({"case": case, "renderer": renderer, "threads": n,
                              "metric": "mrays_per_s", "value": n_rays / seconds / 1e6,
                              "unit": "Mrays/s", "repeats": 2 * repeats + 1})  # fmt: skip
-                if case == "bunny-diffuse" and renderer == "embree":
-                    rows[-1]["agreement"] = diffuse_agreement
+                if renderer == "embree":
+                    rows[-1]["agreement"] = agreements[case]
     # Both builds use every core the process may use (16_mesh.h builds the root's halves side
     # by side; Embree's builder runs on its own thread pool), so the rows say so.
     cores = default_threads()

@@ -279,11 +279,11 @@ def test_geometry_bench_rows_have_the_contract_fields():
     builds = [r for r in rows if r["case"] == "bunny-bvh-build"]
     assert {r["renderer"] for r in builds} == {"rtlab", "embree"}
     assert all(r["metric"] == "seconds" and r["value"] > 0 for r in builds)
-    # Embree was timed on the work rtlab did: its answers (test below for the bound).
-    (embree_diffuse,) = [
-        r for r in rows if r["case"] == "bunny-diffuse" and r["renderer"] == "embree"
-    ]
-    assert embree_diffuse["agreement"] >= 0.999, embree_diffuse
+    # Embree was timed on the work rtlab did: its answers (test below for the bound; the
+    # camera's 2,048 rays here may differ on 2, where 5 of the 1920x1024 ones do).
+    embree = [r for r in rows if r["renderer"] == "embree" and r["case"] != "bunny-bvh-build"]
+    assert {r["case"] for r in embree} == {"bunny-primary", "bunny-diffuse"}
+    assert all(r["agreement"] >= 0.999 for r in embree), embree
 
 
 def test_embree_answers_the_diffuse_rays_as_rtlab_does():
