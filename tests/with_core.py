@@ -1,7 +1,8 @@
 """Run pytest against another build of the core, loaded as tracer._core before anything imports
-tracer: `make sanitize`'s AddressSanitizer build, tests/test_second_compiler.py's Clang build.
+tracer: `make sanitize`'s AddressSanitizer build, tests/test_second_compiler.py's Clang build,
+tests/test_instruction_sets.py's builds for AVX2 and for SSE2.
 
-    python -m tests.with_core CORE.so {sanitized,clang} [pytest arguments]
+    python -m tests.with_core CORE.so {sanitized,clang,avx2,sse2} [pytest arguments]
 
 The second argument names the build expected, and a core that is not it stops the run: a test of
 the wrong build would pass for the wrong reason. LD_PRELOAD (the sanitizer's runtime, which must
@@ -15,6 +16,9 @@ import sys
 EXPECTED = {
     "sanitized": lambda core: core.sanitized,
     "clang": lambda core: "clang" in core.compiler.lower(),
+    # tests/test_instruction_sets.py's builds: packets of 4 lanes (AVX2), of 2 (SSE2 alone).
+    "avx2": lambda core: core.rays_per_packet == 4,
+    "sse2": lambda core: core.rays_per_packet == 2,
 }
 
 
@@ -29,7 +33,10 @@ def main(argv: list[str]) -> int:
     sys.modules["tracer._core"] = core
     spec.loader.exec_module(core)
     if not EXPECTED[expected](core):
-        raise SystemExit(f"{path}: not the {expected} build (compiler {core.compiler})")
+        raise SystemExit(
+            f"{path}: not the {expected} build (compiler {core.compiler}, "
+            f"{core.rays_per_packet} rays a packet)"
+        )
     import pytest
 
     return int(pytest.main(pytest_args))

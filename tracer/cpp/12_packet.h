@@ -24,6 +24,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <utility>
 #include <vector>
 
 #include <immintrin.h>
@@ -84,9 +85,11 @@ inline int count(Mask m) { return __builtin_popcount(lane_bits(m)); }
 // The first n lanes, by one comparison. (Set lane by lane, the mask was eight stores that the
 // vector load of it after them could not take from the store buffer: a render of Ex 25's camera
 // with no objects took 9.8 ms that way and 7.7 ms this way, issue 12.)
+template <size_t... k> constexpr Mask lane_numbers(std::index_sequence<k...>) {
+    return Mask{int64_t(k)...};
+}
 inline Mask first_lanes(int n) {
-    static_assert(rays_per_packet == 8, "a number per lane");
-    const Mask lane = {0, 1, 2, 3, 4, 5, 6, 7};
+    constexpr Mask lane = lane_numbers(std::make_index_sequence<rays_per_packet>{}); // 0, 1, ...
     return lane < n;
 }
 inline bool any(Mask m) { return lane_bits(m) != 0; }
@@ -245,27 +248,34 @@ inline AABB sphere_box(const Vec3 &centre, double radius) {
     return {centre - r, centre + r};
 }
 
-// The box's eight corners projected at once, one per lane.
+// Lanes k of corners first + k of a box (first a multiple of rays_per_packet): all ones where
+// corner first + k takes the max on `axis`, which it does where bit `axis` of its number is set.
+template <size_t... k> Mask corners_on(int first, int axis, std::index_sequence<k...>) {
+    return Mask{((first + int(k)) >> axis & 1) != 0 ? int64_t(-1) : int64_t(0)...};
+}
+
+// The box's eight corners projected, a packet's lanes at once (all eight with AVX-512).
 inline PixelRect pixel_rect(const Camera &cam, const AABB &box) {
-    static_assert(rays_per_packet == 8, "a lane per corner");
-    // Corner k takes the max on axis a where bit a of k is set.
-    const Mask on_x = {0, -1, 0, -1, 0, -1, 0, -1}, on_y = {0, 0, -1, -1, 0, 0, -1, -1},
-               on_z = {0, 0, 0, 0, -1, -1, -1, -1};
-    const Vec3L c{on_x ? splat(box.max.x) : splat(box.min.x),
-                  on_y ? splat(box.max.y) : splat(box.min.y),
-                  on_z ? splat(box.max.z) : splat(box.min.z)};
-    const Vec3L v = c - splat(cam.eye);
-    const Lanes depth = dot(v, splat(cam.forward));
-    if (any(~(depth > 0))) return PixelRect{}; // at or behind the eye (or not finite): all
-    // 03_camera.h primary_ray()'s d = forward + a right + b true_up, solved for each corner.
-    const Lanes inv = 1 / depth;
-    const Lanes a = dot(v, splat(cam.right)) * inv, b = dot(v, splat(cam.true_up)) * inv;
-    const Lanes i = ((a - cam.window_shift) * (1 / cam.plane_width) + 0.5) * cam.width;
-    const Lanes j = (0.5 - b * (1 / cam.plane_height)) * cam.height;
-    PixelRect rect{i[0], i[0], j[0], j[0]};
-    for (int k = 1; k < 8; ++k)
-        rect.i_min = std::min(rect.i_min, i[k]), rect.i_max = std::max(rect.i_max, i[k]),
-        rect.j_min = std::min(rect.j_min, j[k]), rect.j_max = std::max(rect.j_max, j[k]);
+    PixelRect rect{infinity, -infinity, infinity, -infinity};
+    constexpr auto lanes = std::make_index_sequence<rays_per_packet>{};
+    for (int first = 0; first < 8; first += rays_per_packet) {
+        const Mask on_x = corners_on(first, 0, lanes), on_y = corners_on(first, 1, lanes),
+                   on_z = corners_on(first, 2, lanes);
+        const Vec3L c{on_x ? splat(box.max.x) : splat(box.min.x),
+                      on_y ? splat(box.max.y) : splat(box.min.y),
+                      on_z ? splat(box.max.z) : splat(box.min.z)};
+        const Vec3L v = c - splat(cam.eye);
+        const Lanes depth = dot(v, splat(cam.forward));
+        if (any(~(depth > 0))) return PixelRect{}; // at or behind the eye (or not finite): all
+        // 03_camera.h primary_ray()'s d = forward + a right + b true_up, solved for each corner.
+        const Lanes inv = 1 / depth;
+        const Lanes a = dot(v, splat(cam.right)) * inv, b = dot(v, splat(cam.true_up)) * inv;
+        const Lanes i = ((a - cam.window_shift) * (1 / cam.plane_width) + 0.5) * cam.width;
+        const Lanes j = (0.5 - b * (1 / cam.plane_height)) * cam.height;
+        for (int k = 0; k < rays_per_packet; ++k)
+            rect.i_min = std::min(rect.i_min, i[k]), rect.i_max = std::max(rect.i_max, i[k]),
+            rect.j_min = std::min(rect.j_min, j[k]), rect.j_max = std::max(rect.j_max, j[k]);
+    }
     constexpr double margin = 2; // pixels (see above)
     rect.i_min -= margin, rect.i_max += margin, rect.j_min -= margin, rect.j_max += margin;
     if (!(rect.i_max - rect.i_min < infinity && rect.j_max - rect.j_min < infinity))

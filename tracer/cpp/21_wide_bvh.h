@@ -82,21 +82,24 @@ inline D4 fma(D4 a, D4 b, D4 c) {
 #endif
 }
 
-// The same for the 8 lanes of a packet (power.h Lanes; 22_mesh_packets.h): AVX-512's vfmadd
-// where the machine has it.
-inline Lanes fma(Lanes a, Lanes b, Lanes c) {
+// The same for the lanes of a packet (power.h Lanes; 22_mesh_packets.h): AVX-512's vfmadd for
+// its 8, the library's lane by lane for SSE2's 2. (With AVX or AVX2 a packet's 4 lanes are a
+// D4, and fma(D4) serves.)
+template <class V, std::enable_if_t<std::is_same_v<V, Lanes> && !std::is_same_v<V, D4>, int> = 0>
+inline V fma(V a, V b, V c) {
 #if defined(__AVX512F__)
-    static_assert(sizeof(Lanes) == sizeof(__m512d));
-    return bit_cast<Lanes>(_mm512_fmadd_pd(bit_cast<__m512d>(a), bit_cast<__m512d>(b),
-                                           bit_cast<__m512d>(c)));
+    static_assert(sizeof(V) == sizeof(__m512d));
+    return bit_cast<V>(_mm512_fmadd_pd(bit_cast<__m512d>(a), bit_cast<__m512d>(b),
+                                       bit_cast<__m512d>(c)));
 #else
-    Lanes r;
+    V r;
     for (int k = 0; k < rays_per_packet; ++k) r[k] = std::fma(a[k], b[k], c[k]);
     return r;
 #endif
 }
 
-// 15_triangle.h's difference_of_products(), lane by lane, for 4 lanes (D4) or 8 (Lanes).
+// 15_triangle.h's difference_of_products(), lane by lane, for 4 lanes (D4) or a packet's
+// (Lanes).
 template <class V> inline V difference_of_products(V a, V b, V c, V d) {
     V cd = c * d;
     V error = fma(-c, d, cd);

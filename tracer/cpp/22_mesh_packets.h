@@ -298,8 +298,10 @@ struct TriangleHitL {
 
 // A packet's pixels: a block of packet_columns x packet_rows, lane k at column k %
 // packet_columns, row k / packet_columns. A compact block is more coherent than a row of 8: its
-// rays lie closer together, so fewer boxes are met by only some of them.
-constexpr int packet_columns = 4, packet_rows = rays_per_packet / packet_columns;
+// rays lie closer together, so fewer boxes are met by only some of them. (4 x 2 with AVX-512's
+// 8 lanes; a row of 4 or of 2 where a packet has fewer, power.h.)
+constexpr int packet_columns = std::min(4, rays_per_packet),
+              packet_rows = rays_per_packet / packet_columns;
 
 // 03_camera.h primary_ray() through the centres of a block of pixels from (i0, j0), one per
 // lane: 12_packet.h primary_rays() with a row per lane (y times true_up lane by lane is the

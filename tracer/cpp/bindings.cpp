@@ -270,6 +270,8 @@ static std::tuple<Image, nb::dict, Integrator> render(const rt::Scene &scene, in
 
 NB_MODULE(_core, m) {
     m.doc() = "The rtlab ray tracer's C++ core: the lecture's classic algorithm.";
+    // The rays a packet traces at once: 8 with AVX-512, 4 with AVX or AVX2, 2 with SSE2 (power.h).
+    m.attr("rays_per_packet") = rt::rays_per_packet;
 
     nb::class_<rt::Scene>(m, "Scene")
         .def(nb::init<>())

@@ -21,9 +21,21 @@
 
 namespace rt {
 
-// Rays per packet (12_packet.h): 8 doubles fill one AVX-512 register (two AVX2 registers, four
-// SSE2 ones: the compiler splits a wider vector, so the code is the same on every x86-64).
+// Rays per packet (12_packet.h, 22_mesh_packets.h): as many doubles as fill the widest vector
+// register the build may use: 8 with AVX-512, 4 with AVX or AVX2, 2 with SSE2 alone. A vector
+// wider than the machine's registers is split by the compiler, but not everything splits:
+// with 8 lanes on AVX2, GCC 12 compiled each comparison of two vectors of doubles (a Mask)
+// lane by lane, eight scalar compares, branches and stores read back as one vector, and Ex 25
+// at 1920x1024 took 735 ms on one Zen 4 thread, 2.1x the one-ray tracer's 344 ms; with 4
+// lanes, 97 ms (the bunny's primary packets 602 against 76 ms; -march=x86-64-v3 builds, issue
+// 12). The lanes' arithmetic is the same at every width, so each lane's bits are too.
+#if defined(__AVX512F__)
 constexpr int rays_per_packet = 8;
+#elif defined(__AVX__)
+constexpr int rays_per_packet = 4;
+#else
+constexpr int rays_per_packet = 2;
+#endif
 
 typedef double Lanes __attribute__((vector_size(rays_per_packet * sizeof(double))));
 typedef int64_t Mask
