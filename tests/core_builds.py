@@ -78,3 +78,4 @@ def run_tests_with(so: Path, expected: str, *tests: str) -> None:
         env={**os.environ, "OPENBLAS_NUM_THREADS": "1"},
     )
     assert run.returncode == 0, run.stdout[-6000:] + run.stderr[-3000:]
+    assert " passed" in run.stdout.splitlines()[-1], run.stdout[-2000:]

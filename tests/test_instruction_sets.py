@@ -10,10 +10,9 @@ tests/with_core.py before any test runs.
 Each build goes to build/avx2 or build/sse2 (-DRTLAB_MARCH=x86-64-v3, x86-64); ninja rebuilds
 only what changed."""
 
-from pathlib import Path
-
 import pytest
 
+from reference.bench import cpu
 from tests.core_builds import ROOT, build_core, run_tests_with
 
 # The tests whose code differs with the packet's width: packets against one-ray renders of every
@@ -27,17 +26,10 @@ PACKET_TESTS = (
 )
 
 
-def _cpu_flags() -> set[str]:
-    for line in Path("/proc/cpuinfo").read_text().splitlines():
-        if line.startswith("flags"):
-            return set(line.partition(":")[2].split())
-    return set()
-
-
 @pytest.mark.parametrize(
     ("march", "build", "flag"), [("x86-64-v3", "avx2", "avx2"), ("x86-64", "sse2", "sse2")]
 )
 def test_the_core_built_for_an_older_instruction_set_passes_the_packet_tests(march, build, flag):
-    assert flag in _cpu_flags(), f"this machine cannot run a build for {march} (no {flag})"
+    assert flag in cpu()["cpu_flags"], f"this machine cannot run a build for {march} (no {flag})"
     so = build_core(ROOT / "build" / build, f"-DRTLAB_MARCH={march}")
     run_tests_with(so, build, *PACKET_TESTS)
