@@ -49,7 +49,7 @@ namespace rt {
 inline bool packets_serve(const Scene &scene) { return scene.objects.empty(); }
 
 // rays_per_packet, Lanes and Mask are declared in power.h, which both tracers share.
-inline Lanes splat(double v) { return Lanes{} + v; }
+inline Lanes splat(double v) { return broadcast<Lanes>(v); }
 inline Mask mask_all(bool v) { return Mask{} + (v ? -1 : 0); }
 // The lanes of a mask as the bits of an integer (lane k is bit k). The packet tracer asks
 // "does any lane still need this?" before every costly step; written as a loop over the lanes,

@@ -164,7 +164,7 @@ inline M4 slab_test(const WideNode &node, const SlabRay &r, const Interval &rang
     D4 ty1 = (near_planes[1 - r.near_y][1] - r.o.y) * r.inv_d_far.y;
     D4 tz0 = (near_planes[r.near_z][2] - r.o.z) * r.inv_d.z;
     D4 tz1 = (near_planes[1 - r.near_z][2] - r.o.z) * r.inv_d_far.z;
-    D4 lo = D4{} + range.min, hi = D4{} + range.max;
+    D4 lo = D4{} + range.min, hi = broadcast<D4>(range.max);
     lo = tx0 > lo ? tx0 : lo, hi = tx1 < hi ? tx1 : hi;
     lo = ty0 > lo ? ty0 : lo, hi = ty1 < hi ? ty1 : hi;
     lo = tz0 > lo ? tz0 : lo, hi = tz1 < hi ? tz1 : hi;
@@ -488,7 +488,8 @@ inline M8 slab_test8(const QNode8 &node, const SlabRay &r, const Interval &range
     D8 ty1 = (node_plane(node, 1 - r.near_y, 1) - r.o.y) * r.inv_d_far.y;
     D8 tz0 = (node_plane(node, r.near_z, 2) - r.o.z) * r.inv_d.z;
     D8 tz1 = (node_plane(node, 1 - r.near_z, 2) - r.o.z) * r.inv_d_far.z;
-    D8 lo = D8{} + range.min, hi = D8{} + range.max;
+    // lo from range.min plus 0, which makes a -0 +0: t_near's bits order the children (keys).
+    D8 lo = D8{} + range.min, hi = broadcast<D8>(range.max);
     lo = tx0 > lo ? tx0 : lo, hi = tx1 < hi ? tx1 : hi;
     lo = ty0 > lo ? ty0 : lo, hi = ty1 < hi ? ty1 : hi;
     lo = tz0 > lo ? tz0 : lo, hi = tz1 < hi ? tz1 : hi;
@@ -612,12 +613,12 @@ inline F8 q_lanes(const uint8_t *q) {
 struct FloatSlabRay {
     float inv[3], near_c[3], far_c[3];
     int q_near[3], q_far[3];
-    float min_t;   // range.min rounded down
+    float min_t;   // range.min rounded down, +0 for a -0 (lo starts at it: its bits order keys)
     double margin; // the largest of the three axes' margins e (see above)
     bool usable = true;
 
     FloatSlabRay(const SlabRay &r, const float plane_bound[3], const Interval &range)
-        : min_t(to_float_rounded<_MM_FROUND_TO_NEG_INF>(range.min)), margin(0) {
+        : min_t(to_float_rounded<_MM_FROUND_TO_NEG_INF>(range.min) + 0.0f), margin(0) {
         const int near[3] = {r.near_x, r.near_y, r.near_z};
         for (int a = 0; a < 3; ++a) {
             const float i = float(r.inv_d[a]);
@@ -651,19 +652,19 @@ struct FloatSlabRay {
 // those of them whose window is narrower than sure_width (for slab_test8() to decide).
 inline unsigned float_slab_test8(const QNode8 &node, const FloatSlabRay &r, float max_t,
                                  float sure_width, U8 &t_near, unsigned &unsure) {
-    F8 lo = F8{} + r.min_t, hi = F8{} + max_t;
+    F8 lo = broadcast<F8>(r.min_t), hi = broadcast<F8>(max_t);
     const uint8_t *q = &node.q[0][0][0];
     for (int a = 0; a < 3; ++a) {
-        const F8 A = F8{} + node.scale[a] * r.inv[a];
-        const F8 low_b = F8{} + std::fma(node.origin[a], r.inv[a], r.near_c[a]);
-        const F8 high_b = F8{} + std::fma(node.origin[a], r.inv[a], r.far_c[a]);
+        const F8 A = broadcast<F8>(node.scale[a] * r.inv[a]);
+        const F8 low_b = broadcast<F8>(std::fma(node.origin[a], r.inv[a], r.near_c[a]));
+        const F8 high_b = broadcast<F8>(std::fma(node.origin[a], r.inv[a], r.far_c[a]));
         const F8 q0 = q_lanes(q + r.q_near[a]), q1 = q_lanes(q + r.q_far[a]);
         const F8 t0 = fma(q0, A, low_b), t1 = fma(q1, A, high_b);
         lo = t0 > lo ? t0 : lo, hi = t1 < hi ? t1 : hi;
     }
     t_near = bit_cast<U8>(lo); // lo >= min_t >= 0: its bits order as its values
     const unsigned met = lane_bits8(lo <= hi) & node.valid;
-    unsure = met & ~lane_bits8(hi - lo >= F8{} + sure_width);
+    unsure = met & ~lane_bits8(hi - lo >= broadcast<F8>(sure_width));
     return met;
 }
 
