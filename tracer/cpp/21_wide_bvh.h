@@ -164,7 +164,9 @@ inline M4 slab_test(const WideNode &node, const SlabRay &r, const Interval &rang
     D4 ty1 = (near_planes[1 - r.near_y][1] - r.o.y) * r.inv_d_far.y;
     D4 tz0 = (near_planes[r.near_z][2] - r.o.z) * r.inv_d.z;
     D4 tz1 = (near_planes[1 - r.near_z][2] - r.o.z) * r.inv_d_far.z;
-    D4 lo = D4{} + range.min, hi = broadcast<D4>(range.max);
+    // (t_near is compared by value only (WideSearch), where -0 and +0 are equal: unlike
+    // slab_test8()'s, its lo needs no +0.)
+    D4 lo = broadcast<D4>(range.min), hi = broadcast<D4>(range.max);
     lo = tx0 > lo ? tx0 : lo, hi = tx1 < hi ? tx1 : hi;
     lo = ty0 > lo ? ty0 : lo, hi = ty1 < hi ? ty1 : hi;
     lo = tz0 > lo ? tz0 : lo, hi = tz1 < hi ? tz1 : hi;
