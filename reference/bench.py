@@ -192,21 +192,33 @@ def _offset_origins(
     return np.where(back, np.nextafter(rounded, away), rounded)
 
 
+# The seed of `rtlab bench geometry`'s diffuse rays (both renderers' copies of them).
+DIFFUSE_SEED = 12
+
+
+def _rays_leaving(
+    samples: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray], dtype: type[np.floating[Any]]
+) -> tuple[np.ndarray, np.ndarray]:
+    """The rays of _surface_samples()' points and directions in ``dtype``, their origins
+    offset for ``dtype``'s arithmetic (_offset_origins())."""
+    p, magnitude, ng, d = samples
+    o = _offset_origins(p, magnitude, ng, dtype)
+    return np.ascontiguousarray(o), np.ascontiguousarray(d, dtype=dtype)
+
+
 def diffuse_rays(
-    vertices: np.ndarray, faces: np.ndarray, n: int, seed: int = 12
+    vertices: np.ndarray, faces: np.ndarray, n: int, seed: int = DIFFUSE_SEED
 ) -> tuple[np.ndarray, np.ndarray]:
     """n incoherent rays leaving a mesh's surface (float64 origins and unit directions): a
     triangle chosen uniformly by index, a point uniform on it (barycentrics by the square-root
     map), a cosine-distributed direction about its face normal, and the origin moved off the
     surface as the core spawns rays (02_ray.h offset_ray_origin(): p's error bound gamma(7)
     (|b0 p0| + |b1 p1| + |b2 p2|) along Ng, then one ulp further away)."""
-    p, magnitude, ng, d = _surface_samples(vertices, faces, n, seed)
-    o = _offset_origins(p, magnitude, ng, np.float64)
-    return np.ascontiguousarray(o), np.ascontiguousarray(d)
+    return _rays_leaving(_surface_samples(vertices, faces, n, seed), np.float64)
 
 
 def diffuse_rays_float32(
-    vertices: np.ndarray, faces: np.ndarray, n: int, seed: int = 12
+    vertices: np.ndarray, faces: np.ndarray, n: int, seed: int = DIFFUSE_SEED
 ) -> tuple[np.ndarray, np.ndarray]:
     """diffuse_rays()'s rays for a renderer that takes float32 rays (Embree): the same points
     and directions, each origin moved off the surface by float32's error bound instead
@@ -215,9 +227,7 @@ def diffuse_rays_float32(
     it or below: Embree then hit the triangle the ray leaves at t ~ 0 on 50% of the bunny's
     rays (where 9.4% hit anything; same triangle as rtlab's on 49.9%). These agree with rtlab's
     answers on 99.997% of them (suite_geometry() records the agreement)."""
-    p, magnitude, ng, d = _surface_samples(vertices, faces, n, seed)
-    o = _offset_origins(p, magnitude, ng, np.float32)
-    return np.ascontiguousarray(o), np.ascontiguousarray(d, dtype=np.float32)
+    return _rays_leaving(_surface_samples(vertices, faces, n, seed), np.float32)
 
 
 def agreement(triangles: np.ndarray, others: np.ndarray) -> float:
@@ -300,8 +310,10 @@ def suite_geometry(
         return time.perf_counter() - start
 
     primary_o, primary_d = _camera_rays(bunny_only)
-    diffuse_o, diffuse_d = diffuse_rays(mesh.vertices, mesh.faces, diffuse)
-    diffuse_f32 = diffuse_rays_float32(mesh.vertices, mesh.faces, diffuse)
+    # diffuse_rays() and diffuse_rays_float32() from one draw of the points (2M: about 1 s).
+    samples = _surface_samples(mesh.vertices, mesh.faces, diffuse, DIFFUSE_SEED)
+    diffuse_o, diffuse_d = _rays_leaving(samples, np.float64)
+    diffuse_f32 = _rays_leaving(samples, np.float32)
 
     def embree_agreement(
         ours: tuple[np.ndarray, np.ndarray], theirs: tuple[np.ndarray, ...]
