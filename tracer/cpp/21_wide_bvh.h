@@ -671,13 +671,15 @@ inline unsigned float_slab_test8(const QNode8 &node, const FloatSlabRay &r, floa
 }
 
 // A search key per child (t_near's bits above its code), 0 for a child not in `bits`.
+// (Each step zeroes the lanes not in `bits`, by its mask: the unmasked intrinsics of GCC 12 merge
+// into an "undefined" register that its -Wmaybe-uninitialized reports as read, GCC bug 105593.)
 inline K8 search_keys(const U8 &t_near, const uint32_t child[bvh8_width], unsigned bits) {
 #if defined(__AVX512F__)
-    const __m512i t = _mm512_cvtepu32_epi64(bit_cast<__m256i>(t_near));
-    const __m512i code =
-        _mm512_cvtepu32_epi64(_mm256_loadu_si256(reinterpret_cast<const __m256i *>(child)));
-    return bit_cast<K8>(
-        _mm512_maskz_mov_epi64(__mmask8(bits), _mm512_or_si512(_mm512_slli_epi64(t, 32), code)));
+    const __mmask8 in = __mmask8(bits);
+    const __m512i t = _mm512_maskz_cvtepu32_epi64(in, bit_cast<__m256i>(t_near));
+    const __m512i code = _mm512_maskz_cvtepu32_epi64(
+        in, _mm256_loadu_si256(reinterpret_cast<const __m256i *>(child)));
+    return bit_cast<K8>(_mm512_or_si512(_mm512_maskz_slli_epi64(in, t, 32), code));
 #else
     K8 keys;
     for (int c = 0; c < bvh8_width; ++c)
