@@ -1,8 +1,9 @@
 """Other builds of the core for the tests: built with CMake and ninja into a folder of build/
 (ninja rebuilds only what changed since the last run), checked to compile without a warning of
 ours, and a set of tests run against each in a child process that loads it as tracer._core
-(tests/with_core.py). tests/test_second_compiler.py builds with Clang,
-tests/test_instruction_sets.py for AVX2 and for SSE2 alone."""
+(tests/with_core.py). tests/test_second_compiler.py builds with the compiler the .venv build was
+not made with, tests/test_instruction_sets.py for AVX2 and for SSE2 alone (with CMake's default
+compiler, c++)."""
 
 from __future__ import annotations
 

@@ -1,8 +1,9 @@
 """Run pytest against another build of the core, loaded as tracer._core before anything imports
-tracer: `make sanitize`'s AddressSanitizer build, tests/test_second_compiler.py's Clang build,
-tests/test_instruction_sets.py's builds for AVX2 and for SSE2.
+tracer: `make sanitize`'s AddressSanitizer build, tests/test_second_compiler.py's build by the
+compiler the .venv build was not made with (GCC or Clang), tests/test_instruction_sets.py's builds
+for AVX2 and for SSE2.
 
-    python -m tests.with_core CORE.so {sanitized,clang,avx2,sse2} [pytest arguments]
+    python -m tests.with_core CORE.so {sanitized,clang,gcc,avx2,sse2} [pytest arguments]
 
 The second argument names the build expected, and a core that is not it stops the run: a test of
 the wrong build would pass for the wrong reason. LD_PRELOAD (the sanitizer's runtime, which must
@@ -16,6 +17,8 @@ import sys
 EXPECTED = {
     "sanitized": lambda core: core.sanitized,
     "clang": lambda core: "clang" in core.compiler.lower(),
+    # GCC's __VERSION__ is its version alone ("12.2.0"); Clang's names Clang.
+    "gcc": lambda core: core.compiler[:1].isdigit() and "clang" not in core.compiler.lower(),
     # tests/test_instruction_sets.py's builds: packets of 4 lanes (AVX2), of 2 (SSE2 alone).
     "avx2": lambda core: core.rays_per_packet == 4,
     "sse2": lambda core: core.rays_per_packet == 2,
