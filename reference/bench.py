@@ -60,6 +60,15 @@ def cpu() -> dict[str, Any]:
     return {"cpu_model": model, "cpu_flags": flags, "cpu_count": os.cpu_count()}
 
 
+def compiler() -> str:
+    """The compiler that built the core, as it names itself (GCC: its version alone, "12.2.0";
+    Clang: "Debian Clang 19.1.7 ..."): the same source runs at different speeds under each."""
+    from tracer import _core
+
+    version = str(_core.compiler)
+    return f"GCC {version}" if version[:1].isdigit() else version
+
+
 def machine() -> str:
     model = cpu()["cpu_model"]
     return f"{model}, {os.cpu_count()} cores, {platform.system()} {platform.release()}"
@@ -433,7 +442,7 @@ def run_suites(
     if unknown:
         raise UnknownSuiteError(f"unknown suite {unknown[0]!r}; expected {', '.join(SUITES)}")
     rows: list[dict[str, Any]] = []
-    where, on = machine(), cpu()
+    where, on, built = machine(), cpu(), compiler()
     for name in names:
         suite = SUITES[name]
         made = (
@@ -445,6 +454,7 @@ def run_suites(
             row["suite"] = name
             row["machine"] = where
             row.update(on)
+            row["compiler"] = built
             rows.append(row)
     if json_path is not None:
         with atomic_path(json_path) as tmp:
@@ -475,6 +485,8 @@ def format_ratios(rows: list[dict[str, Any]]) -> str:
         lines.append(f"machine: {rows[0]['machine']}")
         if rows[0].get("cpu_flags"):
             lines.append(f"vector units: {' '.join(rows[0]['cpu_flags'])}")
+        if rows[0].get("compiler"):
+            lines.append(f"core built by: {rows[0]['compiler']}")
     return "\n".join(lines)
 
 
@@ -544,7 +556,8 @@ def format_markdown(rows: list[dict[str, Any]], command: str = "rtlab bench all"
     if scaling:
         lines += ["", "Gain from the second thread: " + "; ".join(scaling) + "."]
     if rows:
-        lines += ["", f"CPU: {rows[0]['machine']}. Command: `{command}`."]
+        built = f" Core built by {rows[0]['compiler']}." if rows[0].get("compiler") else ""
+        lines += ["", f"CPU: {rows[0]['machine']}.{built} Command: `{command}`."]
     return "\n".join(lines) + "\n"
 
 

@@ -239,7 +239,7 @@ def test_bench_json_through_the_cli(tmp_path, capsys, monkeypatch):
     are printed."""
     from functools import partial
 
-    from reference.bench import SUITES
+    from reference.bench import SUITES, compiler
 
     small = partial(suite_classic, repeats=1, threads=(1,), width=64, height=32)
     monkeypatch.setitem(SUITES, "classic", small)
@@ -247,10 +247,14 @@ def test_bench_json_through_the_cli(tmp_path, capsys, monkeypatch):
     assert main(["bench", "classic", "--json", str(js), "--markdown", str(md)]) == 0
     printed = capsys.readouterr().out
     assert "ex25-64x32, 1 thread (seconds):" in printed and f"rows in {js}" in printed
+    # The compiler that built the core is named beside the CPU (its code's speed differs).
+    built = compiler()
+    assert f"core built by: {built}\n" in printed
+    assert built.startswith("GCC ") or "clang" in built.lower(), built
     table = md.read_text().splitlines()
     assert table[0] == "| case | threads | rtlab | mitsuba-llvm | povray |"
     assert table[2].startswith("| ex25-64x32 | 1 | ") and table[2].count("(rtlab ") == 2
-    assert f"Command: `rtlab bench classic --json {js}`." in table[-1]
+    assert f"Core built by {built}. Command: `rtlab bench classic --json {js}`." in table[-1]
     md.unlink()
     rows = json.loads(js.read_text())
     assert sorted(r["renderer"] for r in rows) == ["mitsuba-llvm", "povray", "rtlab"]
@@ -260,6 +264,7 @@ def test_bench_json_through_the_cli(tmp_path, capsys, monkeypatch):
         assert isinstance(r["value"], float) and r["value"] > 0, r
         assert r["suite"] == "classic" and r["machine"], r
         assert r["cpu_model"] and "sse2" in r["cpu_flags"], r
+        assert r["compiler"] == built, r
     assert [p.name for p in js.parent.iterdir()] == ["bench.json"]  # no temporary file left
 
 

@@ -478,7 +478,8 @@ NB_MODULE(_core, m) {
     m.attr("sanitized") = false;
 #endif
     // The compiler that built this core, as it names itself (GCC: "12.2.0", Clang: "Debian
-    // Clang 14.0.6"): tests/test_second_compiler.py checks it is testing Clang's build.
+    // Clang 19.1.7 (3~deb12u1)"): tests/test_second_compiler.py builds with the other one, and
+    // `rtlab bench` writes it beside the CPU (the same source runs at different speeds).
     m.attr("compiler") = __VERSION__;
 
     m.def(
