@@ -86,17 +86,18 @@ test: setup lint
 	$(PY) -m pytest -n auto --dist loadgroup
 
 # The core built by GCC with AddressSanitizer and UndefinedBehaviorSanitizer (CMake's
-# RTLAB_SANITIZE, in build/sanitize: .venv's own build is left alone), then the tests that exercise the core
-# (tests/tracer) run against it, in one process that loads it as tracer._core
-# (tests/with_core.py, which tests/test_second_compiler.py uses too). The sanitizer's
-# runtime must be the process's first library, hence LD_PRELOAD (dropped again for the
-# processes the tests start, which run the ordinary build). libstdc++ is preloaded with it: the
-# runtime wraps __cxa_throw when it starts, and a C++ exception thrown later (nanobind
+# RTLAB_SANITIZE, in build/sanitize-gcc, a folder named for its compiler: a CMake cache made for
+# another one is dropped, and nanobind's path with it; .venv's own build is left alone), then the
+# tests that exercise the core (tests/tracer) run against it, in one process that loads it as
+# tracer._core (tests/with_core.py, which tests/test_second_compiler.py uses too). The
+# sanitizer's runtime must be the process's first library, hence LD_PRELOAD (dropped again for
+# the processes the tests start, which run the ordinary build). libstdc++ is preloaded with it:
+# the runtime wraps __cxa_throw when it starts, and a C++ exception thrown later (nanobind
 # re-raising a Python error from the progress callback) would find no real function to call.
 # CPython keeps memory until exit by design, so leak reports are off; any other report ends the
-# run with an error, and --capture=sys lets it reach the terminal. Deselected: the demo verb, which runs POV-Ray and
-# Mitsuba (their JIT and runtimes are not ours to check).
-SANITIZE_DIR := build/sanitize
+# run with an error, and --capture=sys lets it reach the terminal. Deselected: the demo verb,
+# which runs POV-Ray and Mitsuba (their JIT and runtimes are not ours to check).
+SANITIZE_DIR := build/sanitize-gcc
 SANITIZE_PYTEST := -q --capture=sys -p no:cacheprovider -p no:xdist \
   --deselect tests/tracer/test_cli_and_io.py::test_check_and_demo_verbs tests/tracer
 

@@ -8,7 +8,8 @@ component i as (&x)[i], and Debian's Clang 14 (and Clang 19) compiled the triang
 that returned t = NaN, so every mesh went unseen (103 tests of tests/tracer failed under Clang
 while GCC's build passed them).
 
-The build goes to build/second-compiler (ninja rebuilds only what changed), and the tests run in a
+The build goes to build/second-compiler-gcc (or -clang: a CMake cache made for one compiler
+cannot be reused for another; ninja rebuilds only what changed), and the tests run in a
 child process that loads it as tracer._core (tests/with_core.py, as `make sanitize` loads its
 build). Left out there: the browser tests and the demo verb, which start processes of their own
 (those run the .venv build, not this one), and nothing of the core is in them that the other tests
@@ -19,8 +20,6 @@ import shutil
 from tests.core_builds import ROOT, build_core, run_tests_with
 from tracer import _core
 
-BUILD = ROOT / "build" / "second-compiler"
-
 
 def test_the_core_built_by_the_other_compiler_passes_the_core_tests():
     first_is_clang = "clang" in _core.compiler.lower()
@@ -30,7 +29,7 @@ def test_the_core_built_by_the_other_compiler_passes_the_core_tests():
         other = shutil.which("clang++-19") or shutil.which("clang++")
         expected, package = "clang", "clang-19"
     assert other, f"no {expected} compiler: `make setup` installs Debian's {package} package"
-    so = build_core(BUILD, f"-DCMAKE_CXX_COMPILER={other}")
+    so = build_core(ROOT / "build" / f"second-compiler-{expected}", f"-DCMAKE_CXX_COMPILER={other}")
     run_tests_with(
         so,
         expected,
