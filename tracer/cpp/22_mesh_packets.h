@@ -269,10 +269,20 @@ struct TriangleHitL {
                 lanes & slab_test(mesh.nodes[size_t(right)].bounds, r, min, max, t_right);
             const bool l = any(in_left), rr = any(in_right);
             if (l && rr) { // the child the first of the rays enters first, then the other
-                const int k = __builtin_ctz(lane_bits(in_left | in_right));
-                const bool left_first = in_left[k] && (!in_right[k] || t_left[k] <= t_right[k]);
-                stack[top++] = left_first ? Pending{right, in_right, t_right}
-                                          : Pending{left, in_left, t_left};
+                // (The lanes read as bits and the t's compared as vectors, the pending child
+                // stored field by field: Clang 19 read in_left[k] by storing the vector and
+                // loading one lane back, and built the pushed Pending in a temporary, padding
+                // and all. The bunny's primary rays 0.969x the time with Clang, GCC's 1.004x;
+                // five and three alternating rounds, Zen 4, issue 12.)
+                const unsigned lb = lane_bits(in_left), rb = lane_bits(in_right);
+                const int k = __builtin_ctz(lb | rb);
+                const bool left_first =
+                    (lb >> k & 1) &&
+                    (!(rb >> k & 1) || (lane_bits(Mask(t_left <= t_right)) >> k & 1));
+                Pending &later = stack[top++];
+                later.node = left_first ? right : left;
+                later.lanes = left_first ? in_right : in_left;
+                later.t_near = left_first ? t_right : t_left;
                 index = left_first ? left : right;
                 lanes = left_first ? in_left : in_right;
                 continue;
