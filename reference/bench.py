@@ -66,7 +66,7 @@ def compiler() -> str:
     from tracer import _core
 
     version = str(_core.compiler)
-    return f"GCC {version}" if version[:1].isdigit() else version
+    return f"GCC {version}" if _core.compiler_family == "gcc" else version
 
 
 def machine() -> str:

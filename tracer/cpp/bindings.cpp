@@ -478,9 +478,18 @@ NB_MODULE(_core, m) {
     m.attr("sanitized") = false;
 #endif
     // The compiler that built this core, as it names itself (GCC: "12.2.0", Clang: "Debian
-    // Clang 19.1.7 (3~deb12u1)"): tests/test_second_compiler.py builds with the other one, and
-    // `rtlab bench` writes it beside the CPU (the same source runs at different speeds).
+    // Clang 19.1.7 (3~deb12u1)"), and which one it is, from its own macros rather than that text:
+    // tests/test_second_compiler.py builds with the other one, tests/with_core.py checks it has
+    // the build it was asked for, and `rtlab bench` writes it beside the CPU (the same source
+    // runs at different speeds).
     m.attr("compiler") = __VERSION__;
+#if defined(__clang__)
+    m.attr("compiler_family") = "clang";
+#elif defined(__GNUC__)
+    m.attr("compiler_family") = "gcc";
+#else
+    m.attr("compiler_family") = "other";
+#endif
 
     m.def(
         "intersect_sphere",
