@@ -209,6 +209,21 @@ inline Lanes plane_t(const Plane &pl, const RayL &ray) {
     // END SOLUTION
 }
 
+// The lanes whose ray may meet the plane at some t > 0: where plane_t()'s numerator and
+// denominator are non-zero and of one sign. Elsewhere its quotient is <= 0 or NaN, or replaced by
+// infinity (denom == 0), and no test here takes it (each asks t > 0, and t < a bound, which
+// infinity never is). So a packet with no such lane skips plane_t() and its division; the two
+// dot products are plane_t()'s own expressions, so their bits too. Ex 25's shadow rays
+// leave the floor and the spheres upward, and the spheres' reflections mostly so: skipping
+// those divisions, 1.02x on one and two Zen 4 threads (five and seven alternating rounds,
+// Clang 19; tried before with GCC 12's build and lane-by-lane pixel stores, it had gained
+// nothing; issue 12).
+inline Mask may_be_ahead(const Plane &pl, const RayL &ray) {
+    const Vec3L n = splat(pl.normal);
+    const Lanes denom = dot(ray.d, n), num = dot(splat(pl.point) - ray.o, n);
+    return ((num > 0) & (denom > 0)) | ((num < 0) & (denom < 0));
+}
+
 // The image points, in pixel units, that a set of rays passes through lie in [x0, x1] x [y0, y1].
 struct ImageSpan {
     double x0, x1, y0, y1;
@@ -499,6 +514,7 @@ inline ClosestL closest_hit(const Scene &scene, const RayL &ray, Mask active, Ra
         c.id = select(closer, Mask{} + id, c.id);
     }
     for (size_t i = 0; i < scene.planes.size(); ++i, ++id) {
+        if (!any(active & may_be_ahead(scene.planes[i], ray))) continue;
         Lanes t = plane_t(scene.planes[i], ray);
         Mask closer = active & (t > 0) & (t < c.t);
         if (!any(closer)) continue;
@@ -514,9 +530,9 @@ inline ClosestL closest_hit(const Scene &scene, const RayL &ray, Mask active, Ra
 // above the roundings: they ruled out 2.6 of Ex 25's 3 sphere tests per packet of shadow rays
 // and still cost more than the tests they saved: the packet's cone by its serial reductions,
 // square roots and divisions (0.7x to 0.8x the speed), the per-lane one by its own work and
-// branch (0.97x). Skipping the plane's division where no lane can have t > 0 gained nothing
-// either; sphere_t()'s two early outs do pay: without them 0.7x. Issue 12. What pays is the
-// same geometry worked out once a render instead of per packet: `skip`.)
+// branch (0.97x). The plane's division is skipped where no lane can have t > 0
+// (may_be_ahead()); sphere_t()'s two early outs pay too: without them 0.7x. Issue 12. What
+// pays is the same geometry worked out once a render instead of per packet: `skip`.)
 // `skip`: as closest_hit()'s: the spheres that cannot shadow the points of the spheres the
 // packet met, or for primary rays that all met a plane, the spheres whose shadow on it none of
 // the packet's pixels sees (PacketCulling, PrimaryPixels).
@@ -533,6 +549,7 @@ inline Mask any_hit(const Scene &scene, const RayL &ray, Lanes max, Mask active,
     }
     for (const Plane &pl : scene.planes) {
         counts.primitive_tests += uint64_t(count(active & ~blocked));
+        if (!any(active & ~blocked & may_be_ahead(pl, ray))) continue;
         Lanes t = plane_t(pl, ray);
         blocked |= active & (t > 0) & (t < max);
         if (!any(active & ~blocked)) return blocked;
