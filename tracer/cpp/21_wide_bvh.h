@@ -424,8 +424,16 @@ inline bool candidates_hit(M4 candidates, unsigned real, Vertex vertex, Leaf lea
                            const Mesh &mesh, const WatertightRay &wr, Interval &range,
                            TriangleHit &best, int &best_triangle, uint64_t &primitive_tests,
                            bool any) {
+    // The candidates' lanes as bits by one instruction (a true lane's sign bit is set): from
+    // the loop below Clang 19 made a mask register, a vector of it and four lanes taken out one
+    // by one. With the instruction, the bunny's incoherent rays 1.025x (nine alternating rounds,
+    // one Zen 4 thread), the Cornell box 1.031x; the same hits.
+#if defined(__AVX__)
+    const unsigned picked = unsigned(_mm256_movemask_pd(bit_cast<__m256d>(candidates)));
+#else
     unsigned picked = 0;
     for (int l = 0; l < bvh_width; ++l) picked |= unsigned(candidates[l] != 0) << l;
+#endif
     primitive_tests += uint64_t(__builtin_popcount(real));
     bool found = false;
     for (unsigned bits = picked & real; bits != 0; bits &= bits - 1) {
