@@ -98,6 +98,21 @@ inline V fma(V a, V b, V c) {
 #endif
 }
 
+// The lanes of a mask as bits (lane k: bit k), by one instruction where there is one (a true
+// lane's sign bit is set); lane_bits8() below for eight lanes. From the loop, Clang 19 made a
+// mask register, a vector of it and four lanes taken out one by one: with the instruction in
+// candidates_hit(), the bunny's incoherent rays 1.025x (nine alternating rounds, one Zen 4
+// thread), the Cornell box 1.031x; the same hits.
+inline unsigned lane_bits4(M4 m) {
+#if defined(__AVX__)
+    return unsigned(_mm256_movemask_pd(bit_cast<__m256d>(m)));
+#else
+    unsigned b = 0;
+    for (int k = 0; k < bvh_width; ++k) b |= unsigned(m[k] != 0) << k;
+    return b;
+#endif
+}
+
 // 15_triangle.h's difference_of_products(), lane by lane, for 4 lanes (D4) or a packet's
 // (Lanes).
 template <class V> inline V difference_of_products(V a, V b, V c, V d) {
@@ -424,16 +439,7 @@ inline bool candidates_hit(M4 candidates, unsigned real, Vertex vertex, Leaf lea
                            const Mesh &mesh, const WatertightRay &wr, Interval &range,
                            TriangleHit &best, int &best_triangle, uint64_t &primitive_tests,
                            bool any) {
-    // The candidates' lanes as bits by one instruction (a true lane's sign bit is set): from
-    // the loop below Clang 19 made a mask register, a vector of it and four lanes taken out one
-    // by one. With the instruction, the bunny's incoherent rays 1.025x (nine alternating rounds,
-    // one Zen 4 thread), the Cornell box 1.031x; the same hits.
-#if defined(__AVX__)
-    const unsigned picked = unsigned(_mm256_movemask_pd(bit_cast<__m256d>(candidates)));
-#else
-    unsigned picked = 0;
-    for (int l = 0; l < bvh_width; ++l) picked |= unsigned(candidates[l] != 0) << l;
-#endif
+    const unsigned picked = lane_bits4(candidates);
     primitive_tests += uint64_t(__builtin_popcount(real));
     bool found = false;
     for (unsigned bits = picked & real; bits != 0; bits &= bits - 1) {
@@ -508,7 +514,8 @@ inline M8 slab_test8(const QNode8 &node, const SlabRay &r, const Interval &range
     // END SOLUTION
 }
 
-// The lanes of a mask as bits (lane k: bit k), of 8 doubles' lanes or 8 floats'.
+// The lanes of a mask as bits (lane k: bit k), of 8 doubles' lanes or 8 floats' (lane_bits4()
+// above for four).
 typedef int32_t M8F __attribute__((vector_size(bvh8_width * sizeof(int32_t))));
 inline unsigned lane_bits8(M8F m) {
 #if defined(__AVX__)
