@@ -703,6 +703,28 @@ inline K8 search_keys(const U8 &t_near, const uint32_t child[bvh8_width], unsign
 #endif
 }
 
+// The keys of the lowest and the highest lane of `bits`, which holds n = 1 or 2 lanes (for one,
+// its key twice). AVX-512: the lanes met packed to the bottom of the register by one compress
+// and taken from there, where Clang 19 had stored all eight keys to the stack to read two back:
+// the bunny's incoherent rays 1.012x to 1.017x faster on one Zen 4 thread (four sets of five
+// to seven alternating rounds, the same hits). The choice for one child is made by a mask, not
+// by `b != 0 ? b : a`, which GCC 12 compiled as a branch, the one Search8::node() had shed
+// (GCC's build 1.11x slower); with the mask GCC's build takes the time it took (0.984x to
+// 1.001x, three sets).
+inline void one_or_two_keys(const K8 &keys, unsigned bits, int n, uint64_t &a, uint64_t &b) {
+#if defined(__AVX512F__)
+    // (Lanes read from the vector, not by the cast intrinsic to 128 bits: GCC bug 105593 above.)
+    const K8 packed =
+        bit_cast<K8>(_mm512_maskz_compress_epi64(__mmask8(bits), bit_cast<__m512i>(keys)));
+    const uint64_t two = 0 - uint64_t(n - 1); // all ones for two lanes, 0 for one
+    a = packed[0];
+    b = (packed[1] & two) | (a & ~two);
+#else
+    (void)n;
+    a = keys[__builtin_ctz(bits)], b = keys[31 - __builtin_clz(bits)];
+#endif
+}
+
 // Search keys in descending order (the farthest child first, keys of 0 last): AVX-512's
 // bitonic network (Batcher 1968) of six compare-exchange layers, else an insertion sort.
 template <int k, int j> inline K8 bitonic_layer(K8 v) {
@@ -1257,7 +1279,8 @@ template <class Block> struct Search8 {
         // rays 1.059x faster on one Zen 4 thread (nine alternating rounds; GCC's build 1.064x,
         // five) and 1.029x on two; the same hits. Three or more: the six layers of the sort.
         if (n <= 2) {
-            const uint64_t a = keys[__builtin_ctz(bits)], b = keys[31 - __builtin_clz(bits)];
+            uint64_t a, b;
+            one_or_two_keys(keys, bits, n, a, b);
             const uint64_t far = a > b ? a : b, near = a > b ? b : a;
             prefetch(uint32_t(far)), prefetch(uint32_t(near));
             stack[top] = far;
