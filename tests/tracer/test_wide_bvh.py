@@ -111,6 +111,32 @@ def test_batch_threads_change_nothing():
         _core.closest_mesh_hits(core, origins, directions, 0, True)
 
 
+def test_a_batch_answer_held_is_never_written_by_the_next():
+    """closest_mesh_hits() writes its three columns into one block from the images' cache
+    (bindings.cpp allocate_image()): the columns of one answer must not overlap, an answer still
+    held must not be written by a later batch, and a block reused after an answer was dropped
+    must hold the new batch's answer only."""
+    mesh, core = _bunny()
+    origins, directions = diffuse_rays(mesh.vertices, mesh.faces, 4_000, seed=11)
+    others = diffuse_rays(mesh.vertices, mesh.faces, 4_000, seed=12)
+    first = _core.closest_mesh_hits(core, origins, directions, 2)
+    kept = [column.copy() for column in first]
+    t, objects, triangles = first
+    assert not np.shares_memory(t, objects) and not np.shares_memory(objects, triangles)
+    assert not np.shares_memory(t, triangles)
+    other = _core.closest_mesh_hits(core, *others, 2)
+    expected = [column.copy() for column in other]
+    assert not np.array_equal(expected[2], kept[2])  # so an overwrite of `first` would show
+    del other  # its block becomes the spare: the next batch of this size writes into it
+    again = _core.closest_mesh_hits(core, *others, 2)
+    for held, copy in zip(first, kept, strict=True):
+        assert np.array_equal(held, copy)
+    for column, copy in zip(again, expected, strict=True):
+        assert np.array_equal(column, copy)
+    empty = _core.closest_mesh_hits(core, origins[:0], directions[:0], 1)
+    assert [len(column) for column in empty] == [0, 0, 0]
+
+
 def test_the_hierarchy_built_on_two_threads_is_the_one_built_on_one():
     """16_mesh.h builds the root's two halves side by side on a large mesh; the right half's
     nodes, moved after the left's, must be the one-thread build's node for node."""

@@ -154,7 +154,8 @@ ImageCache &image_cache() {
 
 static float *allocate_image(size_t floats) {
     constexpr size_t huge_page = size_t(2) << 20;
-    const size_t bytes = (floats * sizeof(float) + huge_page - 1) / huge_page * huge_page;
+    const size_t bytes =
+        std::max<size_t>(1, (floats * sizeof(float) + huge_page - 1) / huge_page) * huge_page;
     ImageCache &cache = image_cache();
     void *p = nullptr, *stale = nullptr;
     {
@@ -613,11 +614,13 @@ NB_MODULE(_core, m) {
             if (directions.shape(0) != n)
                 throw std::invalid_argument("one direction per origin expected");
             if (threads < 1) throw std::invalid_argument("threads must be at least 1");
-            double *t = new double[n];
-            nb::capsule t_owner(t, [](void *p) noexcept { delete[] static_cast<double *>(p); });
-            int32_t *ids = new int32_t[2 * n]; // objects, then triangles
-            nb::capsule ids_owner(ids,
-                                  [](void *p) noexcept { delete[] static_cast<int32_t *>(p); });
+            // One block for the three columns (t, then objects, then triangles), from the
+            // images' cache (allocate_image()): every entry is written.
+            static_assert(sizeof(double) == 2 * sizeof(float) && sizeof(int32_t) == sizeof(float));
+            float *block = allocate_image(4 * n);
+            nb::capsule owner(block, release_image);
+            double *t = reinterpret_cast<double *>(block);
+            int32_t *ids = reinterpret_cast<int32_t *>(block + 2 * n); // objects, then triangles
             {
                 nb::gil_scoped_release release;
                 rt::set_mesh_packets(s, packets);
@@ -625,8 +628,8 @@ NB_MODULE(_core, m) {
                                       ids + n);
             }
             using Ids = nb::ndarray<nb::numpy, int32_t, nb::shape<-1>>;
-            return std::make_tuple(Column(t, {n}, t_owner), Ids(ids, {n}, ids_owner),
-                                   Ids(ids + n, {n}, ids_owner));
+            return std::make_tuple(Column(t, {n}, owner), Ids(ids, {n}, owner),
+                                   Ids(ids + n, {n}, owner));
         },
         "scene"_a, "origins"_a, "directions"_a, "threads"_a = 1, "packets"_a = true,
         "For each ray (origins, directions: (N, 3) float64) the closest hit with the scene's "
