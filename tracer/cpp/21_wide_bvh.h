@@ -70,32 +70,30 @@ constexpr int bvh_width = 4; // children per wide node, triangles per block
 typedef double D4 __attribute__((vector_size(bvh_width * sizeof(double))));
 typedef int64_t M4 __attribute__((vector_size(bvh_width * sizeof(int64_t)))); // true: all ones
 
-// a b + c, rounded once, per lane: AVX2's vfmadd where the machine has it, else the library's
-// fma lane by lane (correctly rounded too, so the bits are the same on every machine).
-inline D4 fma(D4 a, D4 b, D4 c) {
-#if defined(__FMA__)
-    return _mm256_fmadd_pd(a, b, c);
-#else
-    D4 r;
-    for (int k = 0; k < bvh_width; ++k) r[k] = std::fma(a[k], b[k], c[k]);
-    return r;
-#endif
-}
-
-// The same for the lanes of a packet (power.h Lanes; 22_mesh_packets.h): AVX-512's vfmadd for
-// its 8, the library's lane by lane for SSE2's 2. (With AVX or AVX2 a packet's 4 lanes are a
-// D4, and fma(D4) serves.)
-template <class V, std::enable_if_t<std::is_same_v<V, Lanes> && !std::is_same_v<V, D4>, int> = 0>
+// a b + c, rounded once, lane by lane, for any vector of doubles or floats here (D4, F8, D8,
+// power.h Lanes): one fused multiply-add instruction where the machine has one of the vector's
+// width (AVX-512 for 8 doubles, FMA for 4 doubles or 8 floats), else the library's fma lane
+// by lane, correctly rounded too, so the bits are the same on every machine. (A scalar has no
+// lanes to subscript: this template is not a candidate for double.)
+template <class V, class S = std::decay_t<decltype(std::declval<V>()[0])>,
+          std::enable_if_t<std::is_floating_point_v<S>, int> = 0>
 inline V fma(V a, V b, V c) {
 #if defined(__AVX512F__)
-    static_assert(sizeof(V) == sizeof(__m512d));
-    return bit_cast<V>(_mm512_fmadd_pd(bit_cast<__m512d>(a), bit_cast<__m512d>(b),
-                                       bit_cast<__m512d>(c)));
-#else
-    V r;
-    for (int k = 0; k < rays_per_packet; ++k) r[k] = std::fma(a[k], b[k], c[k]);
-    return r;
+    if constexpr (sizeof(V) == sizeof(__m512d) && std::is_same_v<S, double>)
+        return bit_cast<V>(_mm512_fmadd_pd(bit_cast<__m512d>(a), bit_cast<__m512d>(b),
+                                           bit_cast<__m512d>(c)));
 #endif
+#if defined(__FMA__)
+    if constexpr (sizeof(V) == sizeof(__m256d) && std::is_same_v<S, double>)
+        return bit_cast<V>(_mm256_fmadd_pd(bit_cast<__m256d>(a), bit_cast<__m256d>(b),
+                                           bit_cast<__m256d>(c)));
+    if constexpr (sizeof(V) == sizeof(__m256) && std::is_same_v<S, float>)
+        return bit_cast<V>(_mm256_fmadd_ps(bit_cast<__m256>(a), bit_cast<__m256>(b),
+                                           bit_cast<__m256>(c)));
+#endif
+    V r;
+    for (size_t k = 0; k < sizeof(V) / sizeof(S); ++k) r[k] = std::fma(a[k], b[k], c[k]);
+    return r;
 }
 
 // The lanes of a mask as bits (lane k: bit k), by one instruction where there is one (a true
@@ -596,18 +594,6 @@ template <int mode> inline float to_float_rounded(double x) {
 #else
     static_assert(mode == _MM_FROUND_TO_NEG_INF || mode == _MM_FROUND_TO_POS_INF);
     return mode == _MM_FROUND_TO_NEG_INF ? float_down(x) : float_up(x);
-#endif
-}
-
-// a b + c, rounded once, per lane, for eight floats.
-inline F8 fma(F8 a, F8 b, F8 c) {
-#if defined(__AVX__) && defined(__FMA__)
-    return bit_cast<F8>(_mm256_fmadd_ps(bit_cast<__m256>(a), bit_cast<__m256>(b),
-                                        bit_cast<__m256>(c)));
-#else
-    F8 r;
-    for (int k = 0; k < bvh8_width; ++k) r[k] = std::fma(a[k], b[k], c[k]);
-    return r;
 #endif
 }
 
