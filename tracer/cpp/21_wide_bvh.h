@@ -1127,6 +1127,7 @@ template <class Block> struct Search8 {
     const FloatSlabRay fr;
     float max_t = 0, sure_width = 0; // set_range_max(): range.max rounded up to float, and
                                      // float_slab_test8()'s width of a sure window
+    uint64_t key_limit = 0; // the largest search key whose entry t is at most max_t (step())
     uint32_t next = 0; // the child to visit next (0: pop one from the stack)
     int top = 0;
     TriangleHit best{};
@@ -1149,6 +1150,7 @@ template <class Block> struct Search8 {
     void set_range_max() {
         max_t = to_float_rounded<_MM_FROUND_TO_POS_INF>(range.max);
         sure_width = fr.sure_width(range);
+        key_limit = uint64_t(bit_cast<uint32_t>(max_t)) << 32 | 0xffffffffu;
     }
 
     // Every line of the block or node a code names, without a branch on which: a node's
@@ -1188,8 +1190,16 @@ template <class Block> struct Search8 {
             if (code == 0) {
                 for (;;) {
                     if (top == 0) return false;
+                    // An entry whose entry t (its key's float, at or below the exact one) lies
+                    // past range.max rounded up to float holds nothing nearer than the hit
+                    // found. Compared as the key itself, one integer comparison (non-negative
+                    // floats order as their bits), not as a float widened to double against
+                    // range.max: the bunny's incoherent rays 1.011x to 1.019x faster on one Zen 4
+                    // thread, 1.015x on two, GCC's build 1.011x (alternating rounds). Entries
+                    // in (range.max, max_t] are visited now where they were not; every triangle
+                    // in them lies beyond range.max, so no answer changes (the same hits).
                     const uint64_t key = stack[--top];
-                    if (double(bit_cast<float>(uint32_t(key >> 32))) <= range.max) {
+                    if (key <= key_limit) {
                         code = uint32_t(key);
                         break;
                     }
