@@ -128,6 +128,9 @@ static void fill_mesh(rt::Mesh &mesh, const Vertices &vertices, const Faces &fac
 // the next render of the same size (a benchmark's repeats, a progressive render's passes, a
 // viewer's frames) writes into it instead: every pixel is written, so what it held does not
 // matter. A render of another size frees it. At most one image's memory stays held.
+// closest_mesh_hits() takes its answer's three columns from the same cache, for the same reason
+// (a 2M-ray batch faulted in 32 MB each time): a batch and a render of different sizes take
+// turns freeing each other's block, and the block held may be a batch's.
 //
 // The block is aligned to 2 MiB, so that where transparent huge pages are on for every mapping
 // the kernel can map it in 2 MiB pages if it has them free, but it is not marked MADV_HUGEPAGE:
