@@ -1,9 +1,9 @@
 """The eight-wide tree of 21_wide_bvh.h (Search8), its nodes quantised (QNode8), in both of
 its leaf forms: IndexBlock, for a mesh whose vertices are all floats (the bunny, read from a
-PLY file of floats), and TriangleBlock, for any other mesh; and the four-wide tree a mesh falls
-back to when a box reaches beyond float's range. Each finds what the lecture's one-ray
-traversal finds (packets=False), but at ties (tests/tracer/test_wide_bvh.py says why a tie may
-differ)."""
+PLY file of floats; its triangles with their vertices, up to eight a block), and
+TriangleBlock, for any other mesh; and the four-wide tree a mesh falls back to when a box
+reaches beyond float's range. Each finds what the lecture's one-ray traversal finds
+(packets=False), but at ties (tests/tracer/test_wide_bvh.py says why a tie may differ)."""
 
 from __future__ import annotations
 
@@ -55,6 +55,20 @@ def test_both_leaf_forms_agree_with_the_lecture(scale):
     assert len(differ) <= len(origins) // 1000
     if len(differ):
         _assert_ties(core, origins[differ], directions[differ])
+
+
+def test_leaves_whose_triangles_share_no_vertex_agree_with_the_lecture():
+    """An IndexBlock holds at most eight vertices: the bunny as a soup of triangles (three
+    vertices of their own each, all floats) puts two triangles in a block (six vertices; a
+    third would need nine), so each of its leaves of three or four triangles is cut into two
+    blocks, where the bunny's own leaves (4 to 8 vertices) are one each."""
+    _, mesh = _bunny_scene()
+    faces = np.asarray(mesh.faces)
+    vertices = np.asarray(mesh.vertices)[faces.ravel()]
+    soup = np.arange(len(vertices), dtype=np.int32).reshape(-1, 3)
+    assert np.array_equal(vertices.astype(np.float32).astype(np.float64), vertices)
+    origins, directions = diffuse_rays(vertices, soup, 30_000, seed=5)
+    _agree(_core_of(vertices, soup), origins, directions)
 
 
 def test_rays_from_outside_and_inside_the_bunny_agree():

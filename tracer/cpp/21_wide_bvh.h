@@ -22,9 +22,10 @@
 //   collapsed the same way instead (Search8 below: the eight boxes tested at once, in float
 //   where that decides as the double test does, children ordered by a bitonic sort of integer
 //   keys), its boxes stored in 8 bits a plane against a node's own frame (QNode8) and, where
-//   every vertex is a float, its leaves as the indices of their corners (IndexBlock): boxes
-//   that contain the lecture's boxes, in a shallower tree, and the same triangle tests, so the
-//   same answers, in fewer, cheaper steps from less memory (issue 12).
+//   every vertex is a float, its leaves as their few vertices in float and the numbers of
+//   their corners among them (IndexBlock): boxes that contain the lecture's boxes, in a
+//   shallower tree, and the same triangle tests, so the same answers, in fewer, cheaper steps
+//   from less memory (issue 12).
 //
 // What may differ from Mesh::traverse() is only the order in which leaves are visited (nearest
 // child box first, among four instead of two). Where two triangles are hit at the same t (an
@@ -300,8 +301,9 @@ inline D4 to_double(const F4 &f) {
 // (2.5 MB of Node8, 6.2 MB of leaves of four triangles in float, 192 bytes each) did not fit
 // the part of this machine's 32 MB shared L3 that its neighbours leave: a chain of dependent
 // loads through 4 MB took 26-52 ns a step, through 8 MB 134 ns, through 16 MB 150 ns (issue
-// 12). 128 bytes a node instead of 256, and one line a leaf (IndexBlock) instead of three, took
-// the bunny's tree from 8.7 MB to 4.0 MB and its incoherent rays 1.3x-1.8x faster.
+// 12). 128 bytes a node instead of 256, and one line a leaf (its corners as places in a copy of
+// the vertices) instead of three, took the bunny's tree from 8.7 MB to 4.0 MB and its incoherent
+// rays 1.3x-1.8x faster; the leaves now hold their vertices in two lines (IndexBlock), 5.4 MB.
 // `valid`: the lanes with a child (bit c: lane c); the others are masked out of the slab test.
 struct alignas(64) QNode8 {
     float origin[3], scale[3];
@@ -391,36 +393,55 @@ inline M8 valid_lanes(const QNode8 &node) {
 #endif
 }
 
-// Four triangles of a leaf, for a mesh whose vertices are all floats (a scanned mesh read from
-// a PLY file of floats, like the bunny): each corner as its vertex's place in a copy of the
-// vertices in float, four floats a vertex (x, y, z, 0), times 4. Each converts back to the very
-// same double, so the block tested in double is TriangleBlock's test bit for bit, from one
-// cache line instead of five; a leaf's vertices are shared with its neighbours', and the copy
-// (16 bytes a vertex: 0.8 MB for the bunny) stays in the cache better than the leaves would.
-// Lane l is the triangle `first` + l in leaf order (TriangleBlock's leaf[l]); `lanes_more`:
-// the number of triangles (1 to 4) in bits 0-2, the leaf's next block follows if bit 3 is set.
-// An empty lane's corners are the copy's first vertex three times: a triangle of no area,
-// never a candidate.
+// Up to four triangles of a leaf, for a mesh whose vertices are all floats (a scanned mesh read
+// from a PLY file of floats, like the bunny), with their vertices: up to eight of their own, in
+// float, axis by axis (x[j], y[j], z[j]: vertex j), and each corner as the number of one of them
+// (corner[k][l]: lane l's corner k). Each converts back to the very same double, so the block
+// tested in double is TriangleBlock's test bit for bit. Lane l is the triangle `first` + l in
+// leaf order (TriangleBlock's leaf[l]); `lanes_more`: the number of triangles (1 to 4) in bits
+// 0-2, the leaf's next block follows if bit 3 is set. An empty lane's corners are vertex 0 three
+// times: a triangle of no area, never a candidate.
+// Why a block carries its vertices: a leaf of neighbouring triangles shares most of them (the
+// bunny's leaves of up to four triangles have 4 to 8 vertices, 5 or 6 in most), so its
+// vertices and corners fit two cache lines, both asked for from memory with the leaf (prefetch
+// in Search8). Until then a block held its corners as places in one float copy of the mesh's
+// vertices (one line a block, 16 bytes a vertex, 2.9 MB for the bunny's blocks and copy, 4.1
+// MB now): a leaf's test waited on that copy's lines, which it could ask for only once the
+// block had come, and the bunny's incoherent rays took 1.13x as long on one Zen 4 thread and
+// 1.14x on two (seven and five alternating rounds; the same hits; issue 12).
 struct alignas(64) IndexBlock {
-    int32_t corner[3][bvh_width];
+    static constexpr int vertices = 8;
+    float x[vertices], y[vertices], z[vertices];
+    uint8_t corner[3][bvh_width];
     int32_t first;
     uint32_t lanes_more;
 };
-static_assert(sizeof(IndexBlock) == 64, "an index block is one cache line");
+static_assert(sizeof(IndexBlock) == 2 * 64, "an index block is two cache lines");
 
-// One corner of a block's four triangles, axis by axis: the four vertices loaded (16 bytes
-// each) and transposed into x, y and z lanes, converted to double (exactly).
+// One corner of a block's four triangles, axis by axis, converted to double (exactly): with
+// AVX2, each axis's eight vertices permuted into the corner's lanes by one instruction.
 struct CornerLanes {
     D4 axis[3];
-    CornerLanes(const float *vertices, const int32_t *corner) {
-        __m128 x = _mm_load_ps(vertices + corner[0]), y = _mm_load_ps(vertices + corner[1]),
-               z = _mm_load_ps(vertices + corner[2]), w = _mm_load_ps(vertices + corner[3]);
-        _MM_TRANSPOSE4_PS(x, y, z, w);
-        axis[0] = to_double(bit_cast<F4>(x));
-        axis[1] = to_double(bit_cast<F4>(y));
-        axis[2] = to_double(bit_cast<F4>(z));
+    CornerLanes(const IndexBlock &block, int k) {
+#if defined(__AVX2__)
+        int32_t bytes;
+        __builtin_memcpy(&bytes, block.corner[k], sizeof(bytes));
+        // The lanes' vertex numbers widened to 32 bits; lanes 4-7 (undefined) are not used.
+        const __m256i lanes =
+            _mm256_castsi128_si256(_mm_cvtepu8_epi32(_mm_cvtsi32_si128(bytes)));
+        const float *from[3] = {block.x, block.y, block.z};
+        for (int a = 0; a < 3; ++a) {
+            const __m256 picked = _mm256_permutevar8x32_ps(_mm256_load_ps(from[a]), lanes);
+            axis[a] = to_double(bit_cast<F4>(_mm256_castps256_ps128(picked)));
+        }
+#else
+        for (int l = 0; l < bvh_width; ++l) {
+            const int j = block.corner[k][l];
+            axis[0][l] = block.x[j], axis[1][l] = block.y[j], axis[2][l] = block.z[j];
+        }
+#endif
     }
-    D4 operator[](int k) const { return axis[k]; }
+    D4 operator[](int a) const { return axis[a]; }
 };
 
 // The triangles of one block tested against one ray, in leaf order, as leaf_hit() tests them:
@@ -469,20 +490,19 @@ inline bool block_hits(const TriangleBlock &block, const Mesh &mesh, const Water
         primitive_tests, any);
 }
 
-// An IndexBlock's triangles, their corners read from `vertices` (WideBVH::vertex_floats).
-inline bool block_hits(const IndexBlock &block, const float *vertices, const Mesh &mesh,
-                       const WatertightRay &wr, Interval &range, TriangleHit &best,
-                       int &best_triangle, uint64_t &primitive_tests, bool any) {
-    const CornerLanes p0(vertices, block.corner[0]), p1(vertices, block.corner[1]),
-        p2(vertices, block.corner[2]);
+// An IndexBlock's triangles.
+inline bool block_hits(const IndexBlock &block, const Mesh &mesh, const WatertightRay &wr,
+                       Interval &range, TriangleHit &best, int &best_triangle,
+                       uint64_t &primitive_tests, bool any) {
+    const CornerLanes p0(block, 0), p1(block, 1), p2(block, 2);
     const M4 candidates = sheared_candidates<D4, M4>(p0, p1, p2, wr.o, wr.kx, wr.ky, wr.kz,
                                                      wr.Sx, wr.Sy, wr.Sz, range.min, range.max)
                               .candidates;
     return candidates_hit(
         candidates, (1u << (block.lanes_more & 7u)) - 1,
         [&](int k, int l) -> Vec3 {
-            const float *c = vertices + block.corner[k][l];
-            return {double(c[0]), double(c[1]), double(c[2])};
+            const int j = block.corner[k][l];
+            return {double(block.x[j]), double(block.y[j]), double(block.z[j])};
         },
         [&](int l) { return block.first + l; }, mesh, wr, range, best, best_triangle,
         primitive_tests, any);
@@ -804,37 +824,16 @@ struct WideBVH : MeshAccelerator {
     HugeVector<QNode8> nodes8;               // nodes8[0] is the root
     HugeVector<TriangleBlock> double_blocks; // its leaves' blocks, for a mesh of doubles
     HugeVector<IndexBlock> index_blocks;     // or for a mesh of floats (float_vertices)
-    HugeVector<float> vertex_floats;         // their corners: x, y, z, 0 a vertex
     bool float_vertices = false;
     float plane_bound[3] = {0, 0, 0}; // per axis: no plane read back lies farther from 0
     std::vector<Node8> build_nodes8;         // the tree as collapsed, before quantize()
-    std::vector<int> vertex_slot;            // a vertex's corner index (4 x its place in the copy)
 
     // The eight-wide tree; false (and no tree) where a node cannot be quantised.
     bool build8(const Mesh &mesh) {
-        // IndexBlock's corners are 32-bit, four times a vertex's place in the copy.
-        float_vertices = mesh.vertices.size() <= size_t(std::numeric_limits<int32_t>::max() / 4);
+        float_vertices = true;
         for (const Vec3 &v : mesh.leaf_vertices)
             for (int axis = 0; axis < 3; ++axis)
                 float_vertices = float_vertices && double(float(v[axis])) == v[axis];
-        // The copy holds the vertices in the order the leaves first use them, so that a leaf's
-        // corners lie on a few neighbouring cache lines (1.015x on the bunny's diffuse rays,
-        // six alternating rounds, against the mesh's own order).
-        if (float_vertices) {
-            vertex_slot.assign(mesh.vertices.size(), -1);
-            vertex_floats.reserve(4 * mesh.vertices.size());
-            for (size_t i = 0; i < mesh.order.size(); ++i) {
-                const auto &triangle = mesh.triangles[size_t(mesh.order[i])];
-                for (int k = 0; k < 3; ++k) {
-                    const Vec3 &v = mesh.leaf_vertices[3 * i + size_t(k)];
-                    int &slot = vertex_slot[size_t(triangle[size_t(k)])];
-                    if (slot >= 0) continue;
-                    slot = int(vertex_floats.size());
-                    for (int axis = 0; axis < 4; ++axis)
-                        vertex_floats.push_back(axis < 3 ? float(v[axis]) : 0.0f);
-                }
-            }
-        }
         build_nodes8.reserve(mesh.nodes.size() / 4 + 1);
         if (mesh.nodes[0].count > 0) { // one leaf: a root with that one child
             build_nodes8.emplace_back();
@@ -845,8 +844,8 @@ struct WideBVH : MeshAccelerator {
         bool quantised = true;
         for (size_t k = 0; k < build_nodes8.size() && quantised; ++k)
             quantised = quantize(build_nodes8[k], nodes8[k]);
-        build_nodes8 = {}, vertex_slot = {};
-        if (!quantised) nodes8 = {}, double_blocks = {}, index_blocks = {}, vertex_floats = {};
+        build_nodes8 = {};
+        if (!quantised) nodes8 = {}, double_blocks = {}, index_blocks = {};
         for (const QNode8 &node : nodes8)
             for (int axis = 0; axis < 3; ++axis)
                 plane_bound[axis] = std::max(
@@ -889,21 +888,44 @@ struct WideBVH : MeshAccelerator {
         const size_t first = float_vertices ? index_blocks.size() : double_blocks.size();
         build_nodes8[size_t(index)].child[c] = leaf_code | uint32_t(first);
         const int end = k.first + k.count;
-        for (int f = k.first; f < end; f += bvh_width) {
-            if (!float_vertices) {
+        if (!float_vertices) {
+            for (int f = k.first; f < end; f += bvh_width)
                 double_blocks.push_back(make_block(mesh, f, end));
-                continue;
-            }
-            IndexBlock ib{}; // empty lanes: the copy's first vertex three times
-            const int lanes = std::min(bvh_width, end - f);
-            for (int l = 0; l < lanes; ++l) {
-                const auto &t = mesh.triangles[size_t(mesh.order[size_t(f + l)])];
-                for (int v = 0; v < 3; ++v) ib.corner[v][l] = vertex_slot[size_t(t[size_t(v)])];
-            }
-            ib.first = f;
-            ib.lanes_more = uint32_t(lanes) | (f + bvh_width < end ? 8u : 0u);
-            index_blocks.push_back(ib);
+            return;
         }
+        for (int f = k.first; f < end;) {
+            const IndexBlock block = make_index_block(mesh, f, end);
+            f += int(block.lanes_more & 7u);
+            index_blocks.push_back(block);
+        }
+    }
+
+    // The block of leaf-order triangles first, first + 1, ... before `end`: up to four, as
+    // many as have no more than IndexBlock::vertices vertices among them (at least one).
+    static IndexBlock make_index_block(const Mesh &mesh, int first, int end) {
+        IndexBlock block{};
+        int vertex[IndexBlock::vertices], vertices = 0, lanes = 0; // mesh vertex of each
+        for (; lanes < bvh_width && first + lanes < end; ++lanes) {
+            const auto &triangle = mesh.triangles[size_t(mesh.order[size_t(first + lanes)])];
+            int corner[3], added = vertices;
+            for (int k = 0; k < 3 && added <= IndexBlock::vertices; ++k) {
+                corner[k] = 0;
+                while (corner[k] < added && vertex[corner[k]] != triangle[size_t(k)]) ++corner[k];
+                if (corner[k] == added && added++ < IndexBlock::vertices)
+                    vertex[corner[k]] = triangle[size_t(k)];
+            }
+            if (added > IndexBlock::vertices) break; // this triangle begins the next block
+            for (int j = vertices; j < added; ++j) {
+                const int k = int(std::find(corner, corner + 3, j) - corner);
+                const Vec3 &v = mesh.leaf_vertices[3 * size_t(first + lanes) + size_t(k)];
+                block.x[j] = float(v[0]), block.y[j] = float(v[1]), block.z[j] = float(v[2]);
+            }
+            vertices = added;
+            for (int k = 0; k < 3; ++k) block.corner[k][lanes] = uint8_t(corner[k]);
+        }
+        block.first = first;
+        block.lanes_more = uint32_t(lanes) | (first + lanes < end ? 8u : 0u);
+        return block;
     }
 
     // Lane c of a node's boxes: `box` rounded outward to float (lanes after c: empty boxes).
@@ -1158,11 +1180,12 @@ template <class Block> struct Search8 {
     // their branches are foreseen. The address is chosen by masks, not by `leaf ? a : b`, which
     // GCC 12 compiled as a jump on the code's sign bit for every child asked for (Clang as a
     // conditional move): the bunny's incoherent rays took 1.10x as long (issue 12). A line that
-    // only a TriangleBlock has is asked for in a node as a repeat of its first. Two lines of an
-    // IndexBlock: the second is the leaf's next block, if it has one.
+    // only a TriangleBlock has is asked for in a node as a repeat of its first. An IndexBlock
+    // is two lines, as a node (a leaf's next block, if it has one, is not asked for: the
+    // bunny's leaves of up to four triangles are one block each).
     void prefetch(uint32_t code) const {
         static_assert(sizeof(QNode8) == 2 * 64 &&
-                      (sizeof(Block) == 64 || sizeof(Block) == 5 * 64));
+                      (sizeof(Block) == 2 * 64 || sizeof(Block) == 5 * 64));
         const uintptr_t leaf = 0 - uintptr_t(code >> 31); // all ones for a leaf, else 0
         static_assert(leaf_code == 1u << 31);
         const uintptr_t index = code & ~leaf_code;
@@ -1217,17 +1240,11 @@ template <class Block> struct Search8 {
     bool leaf(uint32_t first_block) {
         for (uint32_t b = first_block, more = 1; more; ++b) {
             const Block &block = blocks[b];
-            bool hit;
-            if constexpr (std::is_same_v<Block, IndexBlock>) {
+            if constexpr (std::is_same_v<Block, IndexBlock>)
                 more = block.lanes_more >> 3;
-                hit = block_hits(block, bvh.vertex_floats.data(), mesh, wr, range, best,
-                                 best_triangle, primitive_tests, any);
-            } else {
+            else
                 more = uint32_t(block.more);
-                hit = block_hits(block, mesh, wr, range, best, best_triangle, primitive_tests,
-                                 any);
-            }
-            if (hit) {
+            if (block_hits(block, mesh, wr, range, best, best_triangle, primitive_tests, any)) {
                 found = true;
                 set_range_max();
                 if (any) return top = 0, false;
