@@ -1261,7 +1261,7 @@ template <class Block> struct Search8 {
     }
 
     // Every line of the block or node a code names, without a branch on which: a node's
-    // children mix the two unpredictably, and the sixteen rays taking turns overlap only where
+    // children mix the two unpredictably, and the rays taking turns overlap only where
     // their branches are foreseen. The address is chosen by masks, not by `leaf ? a : b`, which
     // GCC 12 compiled as a jump on the code's sign bit for every child asked for (Clang as a
     // conditional move): the bunny's incoherent rays took 1.10x as long (issue 12). A line that
@@ -1427,10 +1427,12 @@ template <class Search, class Make>
 inline void interleaved_searches(const Mesh &mesh, size_t start, size_t end, Make make,
                                  double *t_out, int32_t *object_out, int32_t *triangle_out,
                                  RayCounts &counts) {
-    // 16: the eight-wide search takes fewer, cheaper steps than the four-wide one, so more rays
-    // must take turns to cover a memory latency (measured: 8 rays 7% slower than 16, 24 and 32
-    // no faster).
-    constexpr int in_flight = 16;
+    // 12: enough rays taking turns to cover a memory latency. With leaves whose corners lay in
+    // a copy of the vertices, 8 rays were 7% slower than 16, 24 and 32 no faster; since the
+    // leaves carry their vertices (IndexBlock) a leaf waits on memory no more than a node, and
+    // 8, 10 and 12 are alike and 1.012x to 1.019x faster than 16 on one Zen 4 thread, 1.020x
+    // on two (24: 0.972x; five to seven alternating rounds; issue 12).
+    constexpr int in_flight = 12;
     std::optional<Search> slot[in_flight];
     size_t ray_of[in_flight] = {}, i = start;
     int live = 0;
