@@ -303,7 +303,7 @@ inline D4 to_double(const F4 &f) {
 // loads through 4 MB took 26-52 ns a step, through 8 MB 134 ns, through 16 MB 150 ns (issue
 // 12). 128 bytes a node instead of 256, and one line a leaf (its corners as places in a copy of
 // the vertices) instead of three, took the bunny's tree from 8.7 MB to 4.0 MB and its incoherent
-// rays 1.3x-1.8x faster; the leaves now hold their vertices in two lines (IndexBlock), 5.4 MB.
+// rays 1.3x-1.8x faster; the leaves now hold their vertices in two lines (IndexBlock), 5.0 MB.
 // `valid`: the lanes with a child (bit c: lane c); the others are masked out of the slab test.
 struct alignas(64) QNode8 {
     float origin[3], scale[3];
