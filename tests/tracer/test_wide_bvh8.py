@@ -161,9 +161,10 @@ def test_a_leaf_of_many_blocks_agrees_with_the_lecture(floats):
     """A grid with a star of 22 triangles about one point above it, each triangle's box
     centred exactly on that point (corners centre + a, centre - a and centre + b, |b| <= |a|
     per axis): the binary build splits by box centres, none separates them, so they stay in
-    one leaf, which the eight-wide tree reads as a chain of blocks (six, or more where a
-    block's eight vertices do not hold four triangles). Rays through the star from every
-    side; where two of its triangles cross, a ray may meet both at one t (a tie)."""
+    one leaf, which the eight-wide tree reads as a chain of blocks (eleven IndexBlocks: the
+    star's triangles share no vertex, so a block holds two; six TriangleBlocks). Rays through
+    the star from every side; where two of its triangles cross, a ray may meet both at one t
+    (a tie)."""
     vertices, faces = _grid((0.0, 0.0, 0.0), 1.0, n=16, floats=floats)
     rng = np.random.default_rng(3)
     centre = np.array([0.5, 0.5, 2.0])
@@ -173,15 +174,16 @@ def test_a_leaf_of_many_blocks_agrees_with_the_lecture(floats):
     centres = (star.max(axis=1) + star.min(axis=1)) / 2
     assert np.all(centres == centre)
     star = star.reshape(-1, 3) * (1.0 if floats else 1 + 2**-40)
-    faces = np.concatenate([faces, len(vertices) + np.arange(len(star)).reshape(-1, 3)])
+    star_faces = len(vertices) + np.arange(len(star)).reshape(-1, 3)
+    faces = np.concatenate([faces, star_faces]).astype(np.int32)
     vertices = np.concatenate([vertices, star])
-    _, _, count, _ = _core.mesh_hierarchy(vertices, faces.astype(np.int32), 1)
+    _, _, count, _ = _core.mesh_hierarchy(vertices, faces, 1)
     assert max(count) == 22
     n = 20_000
     d = rng.normal(size=(n, 3))
     d /= np.linalg.norm(d, axis=1, keepdims=True)
     targets = centre + rng.uniform(-0.4, 0.4, size=(n, 3))
-    _agree(_core_of(vertices, faces.astype(np.int32)), targets - 3 * d, d, any_ties=True)
+    _agree(_core_of(vertices, faces), targets - 3 * d, d, any_ties=True)
 
 
 def test_a_box_beyond_floats_range_falls_back_to_the_four_wide_tree():

@@ -902,7 +902,7 @@ struct WideBVH : MeshAccelerator {
             const BVHNode &node = mesh.nodes[i];
             Collapse &p = plan[i];
             const double area = node.bounds.area();
-            if (node.count > 0) { // a binary leaf: one leaf, however many children it may have
+            if (node.count > 0) { // a binary leaf: one leaf, however many lanes it may take
                 p.first = node.first, p.count = node.count, p.leaf = true;
                 const double blocks = (node.count + bvh_width - 1) / bvh_width;
                 std::fill(std::begin(p.cost), std::end(p.cost), area * block_cost * blocks);
@@ -999,13 +999,14 @@ struct WideBVH : MeshAccelerator {
                     vertex[corner[k]] = triangle[size_t(k)];
             }
             if (added > IndexBlock::vertices) break; // this triangle begins the next block
-            for (int j = vertices; j < added; ++j) {
-                const int k = int(std::find(corner, corner + 3, j) - corner);
+            for (int k = 0; k < 3; ++k) {
+                const int j = corner[k];
+                block.corner[k][lanes] = uint8_t(j);
+                if (j < vertices) continue; // an earlier triangle's vertex, already stored
                 const Vec3 &v = mesh.leaf_vertices[3 * size_t(first + lanes) + size_t(k)];
                 block.x[j] = float(v[0]), block.y[j] = float(v[1]), block.z[j] = float(v[2]);
             }
             vertices = added;
-            for (int k = 0; k < 3; ++k) block.corner[k][lanes] = uint8_t(corner[k]);
         }
         block.first = first;
         block.lanes_more = uint32_t(lanes) | (first + lanes < end ? 8u : 0u);
