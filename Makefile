@@ -11,11 +11,11 @@ PY := $(VENV)/bin/python
 # Playwright (whose own `playwright install` downloads a browser, which cannot work offline);
 # Clang 19 (Debian 12's clang-19) builds the C++ core: on the AMD Zen 4 of this machine class its
 # build ran Ex 25 1.07x, the bunny's incoherent rays 1.05x and the Cornell box 1.03x faster than
-# GCC 12's build of the same source, the bunny's primary packets 0.92x (README, Speed), and it
-# compiles in two thirds of the time. GCC (g++) builds the core a second time for
-# tests/test_second_compiler.py (undefined behaviour that one compiler lets pass, the other may
-# not), for tests/test_instruction_sets.py and for `make sanitize`; the students' builds
-# (lessons/) use c++ too.
+# GCC 12's build of the same source, the bunny's primary packets 0.92x
+# (reference/speed-log.md), and it compiles in two thirds of the time. GCC (g++) builds the
+# core a second time for tests/test_second_compiler.py (undefined behaviour that one compiler
+# lets pass, the other may not), for tests/test_instruction_sets.py and for `make sanitize`;
+# the students' builds (lessons/) use c++ too.
 APT_PACKAGES := povray libllvm19 libosmesa6 chromium clang-19
 CORE_CXX := clang++-19
 CPP_SOURCES := CMakeLists.txt pyproject.toml $(wildcard tracer/cpp/*.h tracer/cpp/*.cpp)
