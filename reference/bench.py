@@ -1,12 +1,14 @@
 """Speed, side by side: ``rtlab bench SUITE --json FILE`` (a benchmark, not a test).
 
 Every row has ``case``, ``renderer``, ``threads``, ``metric``, ``value`` and ``unit``, plus
-``repeats`` and ``machine``. Times are the best of several runs in one process, interleaved by
-renderer, so that ratios taken within one run hold even when the shared machine's absolute
-speed drifts. Renderers: ``rtlab``, ``povray`` (its own Trace Time of one pass, start-up
-excluded), ``mitsuba-llvm`` (a warm render, JIT compile excluded), ``mitsuba-scalar``, and in
-the convergence suite ``mitsuba-llvm-stratified`` (Mitsuba's stratified sampler, the strata
-rtlab draws: reference/convergence.py MITSUBA).
+``repeats`` and ``machine`` (and ``run``, its run's number, from ``--runs N``; several runs
+are summarised by ``--runs`` or ``rtlab bench --summarize FILE...``: summarize_runs()).
+Times are the best of several runs in one process, interleaved by renderer, so that ratios
+taken within one run hold even when the shared machine's absolute speed drifts. Renderers:
+``rtlab``, ``povray`` (its own Trace Time of one pass, start-up excluded), ``mitsuba-llvm``
+(a warm render, JIT compile excluded), ``mitsuba-scalar``, and in the convergence suite
+``mitsuba-llvm-stratified`` (Mitsuba's stratified sampler, the strata rtlab draws:
+reference/convergence.py MITSUBA).
 """
 
 from __future__ import annotations
@@ -436,18 +438,26 @@ class UnknownSuiteError(ValueError):
 
 
 def run_suites(
-    names: list[str], json_path: str | os.PathLike[str] | None, engine: Any = None
+    names: list[str],
+    json_path: str | os.PathLike[str] | None,
+    engine: Any = None,
+    out_dir: str | os.PathLike[str] | None = None,
 ) -> list[dict]:
+    """The suites' rows, each with its suite and the machine's CPU and compiler, written to
+    json_path if given. The convergence suite's plots go to out_dir (default: beside the JSON,
+    or out/)."""
     unknown = [n for n in names if n not in SUITES]
     if unknown:
         raise UnknownSuiteError(f"unknown suite {unknown[0]!r}; expected {', '.join(SUITES)}")
     rows: list[dict[str, Any]] = []
     where, on, built = machine(), cpu(), compiler()
+    if out_dir is None and json_path:
+        out_dir = Path(json_path).parent
     for name in names:
         suite = SUITES[name]
         made = (
-            suite(out_dir=Path(json_path).parent if json_path else "out", engine=engine)
-            if name == "convergence" and (json_path or engine is not None)
+            suite(out_dir=out_dir or "out", engine=engine)
+            if name == "convergence" and (out_dir or engine is not None)
             else suite()
         )
         for row in made:
@@ -527,18 +537,21 @@ def _label(rows: list[dict[str, Any]]) -> Callable[[dict[str, Any]], str]:
     return lambda r: r["case"] if len(metrics[r["case"]]) == 1 else f"{r['case']}, {r['metric']}"
 
 
+def _table_head(rows: list[dict[str, Any]]) -> tuple[list[str], list[str]]:
+    """The renderers as the table's columns (rtlab first) and the table's first two lines."""
+    ours_too = any(r["renderer"] == "rtlab" for r in rows)
+    names = (["rtlab"] if ours_too else []) + sorted({r["renderer"] for r in rows} - {"rtlab"})
+    return names, ["| " + " | ".join(["case", "threads", *names]) + " |",
+                   "|" + "---|" * (2 + len(names))]  # fmt: skip
+
+
 def format_markdown(rows: list[dict[str, Any]], command: str = "rtlab bench all") -> str:
     """The rows of one run as a Markdown table for the README: rtlab's figure and every other
     renderer's (or engine's) with rtlab's speed-up over it (below 1: rtlab is slower), then each
     renderer's gain from the second thread, the CPU and the command."""
     rows = [r for r in rows if r["metric"] != "rmse"] + _times_to_error(rows)
     label = _label(rows)
-    ours_too = any(r["renderer"] == "rtlab" for r in rows)
-    names = (["rtlab"] if ours_too else []) + sorted({r["renderer"] for r in rows} - {"rtlab"})
-    lines = [
-        "| " + " | ".join(["case", "threads", *names]) + " |",
-        "|" + "---|" * (2 + len(names)),
-    ]
+    names, lines = _table_head(rows)
     for case, threads in sorted({(label(r), r["threads"]) for r in rows}):
         group = {r["renderer"]: r for r in rows if (label(r), r["threads"]) == (case, threads)}
         ours = group.get("rtlab")
@@ -590,3 +603,181 @@ def format_scaling(rows: list[dict[str, Any]]) -> list[str]:
                          if (s, c) == (suite, case))  # fmt: skip
         lines.append(f"{suite + ': ' if suite else ''}{case}, 1 -> 2 threads: {each}")
     return lines
+
+
+# -- several runs -------------------------------------------------------------------------
+# The README's figures are medians of five runs with the range of rtlab's ratio over them.
+# Each ratio is taken within one run, where the renderers took turns, and only then across
+# runs: between runs these shared machines drift by 20%, which a median of times would mix in.
+
+
+class RunsError(ValueError):
+    """Runs that cannot be summarised together: from different machines or compilers, or a
+    file that holds no bench rows. The message names the file."""
+
+
+def _machine_of(rows: list[dict[str, Any]]) -> tuple[Any, ...]:
+    first = rows[0] if rows else {}
+    return (first.get("cpu_model"), first.get("cpu_count"), first.get("compiler"))
+
+
+def read_runs(paths: list[str | os.PathLike[str]]) -> list[list[dict[str, Any]]]:
+    """The runs in `rtlab bench --json` files: one run a file, or several where the rows carry
+    ``run`` (``rtlab bench --runs N``). Refuses a file that is not a list of bench rows, and
+    runs whose CPU, core count or compiler differ from the first file's."""
+    runs: list[list[dict[str, Any]]] = []
+    first: tuple[Any, ...] | None = None
+    for path in paths:
+        try:
+            rows = json.loads(Path(path).read_text(encoding="utf-8"))
+        except OSError as exc:
+            raise RunsError(f"{path}: cannot read it: {exc.strerror or exc}") from exc
+        except json.JSONDecodeError as exc:
+            raise RunsError(f"{path}: not JSON ({exc.msg}, line {exc.lineno})") from exc
+        needed = {"case", "renderer", "threads", "metric", "value", "unit"}
+        if (
+            not isinstance(rows, list)
+            or not rows
+            or not all(isinstance(r, dict) and needed <= set(r) for r in rows)
+        ):
+            raise RunsError(
+                f"{path}: expected the list of rows `rtlab bench --json` writes, each with "
+                + ", ".join(sorted(needed))
+            )
+        where = _machine_of(rows)
+        if first is None:
+            first = where
+        elif where != first:
+            raise RunsError(
+                f"{path}: a run on {where[0]} ({where[1]} cores, core built by {where[2]}), "
+                f"the first on {first[0]} ({first[1]} cores, {first[2]}): ratios of "
+                "different machines or builds do not mix"
+            )
+        numbers = sorted({r["run"] for r in rows if "run" in r})
+        if numbers:
+            runs += [[r for r in rows if r.get("run") == n] for n in numbers]
+        else:
+            runs.append(rows)
+    return runs
+
+
+def _spread(values: list[float]) -> dict[str, float]:
+    return {"median": float(np.median(values)), "min": min(values), "max": max(values)}
+
+
+def summarize_runs(runs: list[list[dict[str, Any]]]) -> list[dict[str, Any]]:
+    """One row per suite, case, thread count, metric and renderer over several runs of the same
+    suites: ``value``, the median of its values (``values``, in run order; ``runs``, how
+    many), and beside rtlab for every other renderer ``ratio``, ``ratio_min`` and
+    ``ratio_max``, the median and range of rtlab's speed-up over it (``ratios``), each taken
+    within one run. Convergence rows become times to rtlab's error run by run first, as
+    format_markdown() shows one run. The machine's fields are the first run's."""
+    keyed: dict[tuple[Any, ...], list[tuple[int, dict[str, Any]]]] = {}
+    labels: dict[tuple[Any, ...], set[str]] = {}
+    for number, rows in enumerate(runs):
+        rows = [r for r in rows if r["metric"] != "rmse"] + _times_to_error(rows)
+        label = _label(rows)
+        for r in rows:
+            # A time to error names its run's target (rtlab's median RMSE): grouped without it.
+            case = label(r).split(", time to RMSE")[0]
+            key = (r.get("suite", ""), case, r["threads"], r["metric"], r["renderer"])
+            keyed.setdefault(key, []).append((number, r))
+            labels.setdefault(key, set()).add(label(r))
+    made = []
+    for key, seen in keyed.items():
+        suite, case, renderer = key[0], key[1], key[4]
+        if len(labels[key]) == 1:
+            case = next(iter(labels[key]))
+        else:  # the runs' targets differ
+            case += ", time to rtlab's median RMSE of each run"
+        first = seen[0][1]
+        values = [r["value"] for _, r in seen]
+        row = {**{k: v for k, v in first.items() if k not in ("value", "run", "repeats")},
+               "suite": suite, "case": case, "value": float(np.median(values)),
+               "values": values, "runs": len(values)}  # fmt: skip
+        if renderer != "rtlab":
+            ours = {n: r for n, r in keyed.get((*key[:4], "rtlab"), [])}
+            ratios = [_ratio(ours[n], r) for n, r in seen if n in ours]
+            if ratios:
+                spread = _spread(ratios)
+                row.update(ratio=spread["median"], ratio_min=spread["min"],
+                           ratio_max=spread["max"], ratios=ratios)  # fmt: skip
+        made.append(row)
+    return made
+
+
+def summarize_scaling(runs: list[list[dict[str, Any]]]) -> dict[tuple[str, str, str], list[float]]:
+    """Each renderer's gain from the second thread (thread_scaling()), run by run."""
+    gains: dict[tuple[str, str, str], list[float]] = {}
+    for rows in runs:
+        for key, gain in thread_scaling(rows).items():
+            gains.setdefault(key, []).append(gain)
+    return gains
+
+
+def _with_range(x: float, low: float, high: float, runs: int) -> str:
+    return f"{x:.2f}x" if runs == 1 else f"{x:.2f}x [{low:.2f}-{high:.2f}]"
+
+
+def _scaling_lines(gains: dict[tuple[str, str, str], list[float]]) -> list[str]:
+    lines = []
+    for suite, case in sorted({(s, c) for s, c, _ in gains}):
+        each = ", ".join(
+            f"{name} " + _with_range(float(np.median(g)), min(g), max(g), len(g))
+            for (s, c, name), g in gains.items() if (s, c) == (suite, case)
+        )  # fmt: skip
+        lines.append(f"{suite + ': ' if suite else ''}{case}, 1 -> 2 threads: {each}")
+    return lines
+
+
+def format_summary(runs: list[list[dict[str, Any]]]) -> str:
+    """The runs as format_ratios() prints one: each renderer's median value and rtlab's median
+    speed-up over it [least-greatest over the runs], then the gains from the second thread."""
+    rows = summarize_runs(runs)
+    lines = [f"{len(runs)} runs: medians, and rtlab's ratio's range over the runs"]
+    for case, threads, metric in sorted({(r["case"], r["threads"], r["metric"]) for r in rows}):
+        lines.append(f"{case}, {threads} thread{'s' if threads > 1 else ''} ({metric}):")
+        for r in rows:
+            if (r["case"], r["threads"], r["metric"]) != (case, threads, metric):
+                continue
+            ratio = ""
+            if "ratio" in r:
+                ratio = "   rtlab " + _with_range(r["ratio"], r["ratio_min"], r["ratio_max"],
+                                                  len(r["ratios"]))  # fmt: skip
+            lines.append(f"  {r['renderer']:<16}{r['value']:>10.4f} {r['unit']}{ratio}")
+    lines += _scaling_lines(summarize_scaling(runs))
+    if rows and rows[0].get("machine"):
+        lines.append(f"machine: {rows[0]['machine']}")
+        if rows[0].get("compiler"):
+            lines.append(f"core built by: {rows[0]['compiler']}")
+    return "\n".join(lines)
+
+
+def format_summary_markdown(runs: list[list[dict[str, Any]]], command: str) -> str:
+    """The runs as the README's table: each cell a renderer's median value, and beside rtlab
+    the median of rtlab's speed-up over it [its range over the runs]; then the gains from the
+    second thread, the CPU, the compiler and the command."""
+    rows = summarize_runs(runs)
+    names, lines = _table_head(rows)
+    for case, threads in sorted({(r["case"], r["threads"]) for r in rows}):
+        group = {r["renderer"]: r for r in rows if (r["case"], r["threads"]) == (case, threads)}
+        cells = []
+        for name in names:
+            r = group.get(name)
+            if r is None:
+                cells.append("")
+                continue
+            cell = f"{r['value']:.4g} {r['unit']}"
+            if "ratio" in r:
+                cell += " (rtlab " + _with_range(r["ratio"], r["ratio_min"], r["ratio_max"],
+                                                 len(r["ratios"])) + ")"  # fmt: skip
+            cells.append(cell)
+        lines.append(f"| {case} | {threads} | " + " | ".join(cells) + " |")
+    scaling = _scaling_lines(summarize_scaling(runs))
+    if scaling:
+        lines += ["", "Gain from the second thread: " + "; ".join(scaling) + "."]
+    if rows:
+        built = f" Core built by {rows[0]['compiler']}." if rows[0].get("compiler") else ""
+        lines += ["", f"{len(runs)} runs: medians, and rtlab's ratio's range over the runs. "
+                  f"CPU: {rows[0].get('machine', '')}.{built} Command: `{command}`."]  # fmt: skip
+    return "\n".join(lines) + "\n"

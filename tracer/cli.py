@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -210,7 +211,15 @@ def cmd_compare(args: argparse.Namespace) -> int:
 
 def cmd_bench(args: argparse.Namespace) -> None:
     from reference.bench import SUITES, format_ratios, run_suites
+    from tracer.image import atomic_path
 
+    if args.summarize:
+        if args.suite is not None or args.runs != 1:
+            raise UsageError("bench: --summarize reads runs already made: give no suite, no --runs")
+        _bench_summary(args, args.summarize, "rtlab bench --summarize " + " ".join(args.summarize))
+        return
+    if args.suite is None:
+        raise UsageError(f"bench: which suite? expected all or {', '.join(SUITES)}")
     names = list(SUITES) if args.suite == "all" else [args.suite]
     if names[0] not in SUITES:
         raise UsageError(
@@ -220,18 +229,61 @@ def cmd_bench(args: argparse.Namespace) -> None:
     from tracer.batch import Engine
 
     engine = Engine(args.workers, args.scheduler) if args.workers or args.scheduler else None
+    command = f"rtlab bench {args.suite}" + (f" --runs {args.runs}" if args.runs > 1 else "")
+    command += f" --json {args.json}" if args.json else ""
+    if args.runs > 1:
+        # Each run whole, one after the other (its renderers taking turns within it); the rows
+        # of all runs go to one file, each with its run's number.
+        runs = []
+        for number in range(1, args.runs + 1):
+            print(f"run {number} of {args.runs}", flush=True)
+            out_dir = Path(args.json).parent if args.json else None
+            made = run_suites(names, None, engine, out_dir=out_dir)
+            runs.append([{**r, "run": number} for r in made])
+        if args.json:
+            with atomic_path(args.json) as tmp:
+                tmp.write_text(json.dumps([r for run in runs for r in run], indent=2) + "\n")
+        _print_summary(args, runs, command)
+        return
     rows = run_suites(names, args.json, engine)  # engine: the convergence suite's (a case a task)
     print(format_ratios(rows))
     if args.json:
         print(f"rows in {args.json}")
     if args.markdown:
         from reference.bench import format_markdown
-        from tracer.image import atomic_path
 
-        command = f"rtlab bench {args.suite}" + (f" --json {args.json}" if args.json else "")
-        with atomic_path(args.markdown) as tmp:
-            tmp.write_text(format_markdown(rows, command))
-        print(f"table in {args.markdown}")
+        _write_table(args.markdown, format_markdown(rows, command))
+
+
+def _bench_summary(args: argparse.Namespace, paths: list[str], command: str) -> None:
+    """`rtlab bench --summarize FILE...`: the runs in those files, summarised."""
+    from reference.bench import RunsError, read_runs
+
+    if args.json:
+        raise UsageError("bench: --summarize writes no rows (--json); --markdown writes its table")
+    try:
+        runs = read_runs(paths)
+    except RunsError as exc:
+        raise UsageError(f"bench: {exc}") from exc
+    _print_summary(args, runs, command)
+
+
+def _print_summary(args: argparse.Namespace, runs: list[list[dict]], command: str) -> None:
+    from reference.bench import format_summary, format_summary_markdown
+
+    print(format_summary(runs))
+    if args.json:
+        print(f"rows of the {len(runs)} runs in {args.json}")
+    if args.markdown:
+        _write_table(args.markdown, format_summary_markdown(runs, command))
+
+
+def _write_table(path: str, table: str) -> None:
+    from tracer.image import atomic_path
+
+    with atomic_path(path) as tmp:
+        tmp.write_text(table)
+    print(f"table in {path}")
 
 
 def cmd_view(args: argparse.Namespace) -> int:
@@ -306,9 +358,23 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_compare)
 
     p = sub.add_parser("bench", help="speed side by side, as JSON rows and ratios")
-    p.add_argument("suite", help="a suite name (classic) or all")
+    p.add_argument("suite", nargs="?", help="a suite name (classic) or all")
     p.add_argument("--json", help="write the rows here")
     p.add_argument("--markdown", help="write the figures as a Markdown table here (the README's)")
+    p.add_argument(
+        "--runs",
+        type=_positive_int,
+        default=1,
+        help="run the suites this many times, one after the other; print and tabulate the "
+        "medians and the range of rtlab's ratio (each ratio taken within one run)",
+    )
+    p.add_argument(
+        "--summarize",
+        nargs="+",
+        metavar="JSON",
+        help="summarise runs already made (files of --json, one run each or --runs' several) "
+        "as --runs does, instead of running a suite",
+    )
     from tracer.batch import add_engine_arguments  # convergence: each case a Dask task
 
     add_engine_arguments(p, default_serial=True, zero="no Dask")
