@@ -715,6 +715,12 @@ def summarize_scaling(runs: list[list[dict[str, Any]]]) -> dict[tuple[str, str, 
     return gains
 
 
+def _runs_heading(n: int) -> str:
+    if n == 1:
+        return "1 run"
+    return f"{n} runs: medians, and rtlab's ratio's range over the runs"
+
+
 def _with_range(x: float, low: float, high: float, runs: int) -> str:
     return f"{x:.2f}x" if runs == 1 else f"{x:.2f}x [{low:.2f}-{high:.2f}]"
 
@@ -734,7 +740,7 @@ def format_summary(runs: list[list[dict[str, Any]]]) -> str:
     """The runs as format_ratios() prints one: each renderer's median value and rtlab's median
     speed-up over it [least-greatest over the runs], then the gains from the second thread."""
     rows = summarize_runs(runs)
-    lines = [f"{len(runs)} runs: medians, and rtlab's ratio's range over the runs"]
+    lines = [_runs_heading(len(runs))]
     for case, threads, metric in sorted({(r["case"], r["threads"], r["metric"]) for r in rows}):
         lines.append(f"{case}, {threads} thread{'s' if threads > 1 else ''} ({metric}):")
         for r in rows:
@@ -778,6 +784,6 @@ def format_summary_markdown(runs: list[list[dict[str, Any]]], command: str) -> s
         lines += ["", "Gain from the second thread: " + "; ".join(scaling) + "."]
     if rows:
         built = f" Core built by {rows[0]['compiler']}." if rows[0].get("compiler") else ""
-        lines += ["", f"{len(runs)} runs: medians, and rtlab's ratio's range over the runs. "
-                  f"CPU: {rows[0].get('machine', '')}.{built} Command: `{command}`."]  # fmt: skip
+        lines += ["", f"{_runs_heading(len(runs))}. CPU: {rows[0].get('machine', '')}.{built} "
+                  f"Command: `{command}`."]  # fmt: skip
     return "\n".join(lines) + "\n"

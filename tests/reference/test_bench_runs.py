@@ -99,6 +99,14 @@ def test_times_to_error_are_made_in_each_run_then_summarised():
     assert other["ratios"] == pytest.approx([4.0, 4.0]) and other["runs"] == 2
 
 
+def test_one_run_summarised_is_its_figures_without_ranges():
+    text = format_summary(DRIFTING[:1])
+    assert text.splitlines()[0] == "1 run"
+    assert "  povray             10.0000 s   rtlab 10.00x\n" in text + "\n"
+    table = format_summary_markdown(DRIFTING[:1], "c")
+    assert "| ex25 | 1 | 1 s | 10 s (rtlab 10.00x) |" in table and "1 run. CPU" in table
+
+
 def test_read_runs_splits_a_file_of_several_runs_and_refuses_mixed_machines(tmp_path):
     several = tmp_path / "several.json"
     rows = [{**r, "run": n} for n, run in enumerate(DRIFTING, 1) for r in run]
