@@ -537,41 +537,11 @@ def _label(rows: list[dict[str, Any]]) -> Callable[[dict[str, Any]], str]:
     return lambda r: r["case"] if len(metrics[r["case"]]) == 1 else f"{r['case']}, {r['metric']}"
 
 
-def _table_head(rows: list[dict[str, Any]]) -> tuple[list[str], list[str]]:
-    """The renderers as the table's columns (rtlab first) and the table's first two lines."""
-    ours_too = any(r["renderer"] == "rtlab" for r in rows)
-    names = (["rtlab"] if ours_too else []) + sorted({r["renderer"] for r in rows} - {"rtlab"})
-    return names, ["| " + " | ".join(["case", "threads", *names]) + " |",
-                   "|" + "---|" * (2 + len(names))]  # fmt: skip
-
-
 def format_markdown(rows: list[dict[str, Any]], command: str = "rtlab bench all") -> str:
     """The rows of one run as a Markdown table for the README: rtlab's figure and every other
     renderer's (or engine's) with rtlab's speed-up over it (below 1: rtlab is slower), then each
     renderer's gain from the second thread, the CPU and the command."""
-    rows = [r for r in rows if r["metric"] != "rmse"] + _times_to_error(rows)
-    label = _label(rows)
-    names, lines = _table_head(rows)
-    for case, threads in sorted({(label(r), r["threads"]) for r in rows}):
-        group = {r["renderer"]: r for r in rows if (label(r), r["threads"]) == (case, threads)}
-        ours = group.get("rtlab")
-        cells = []
-        for name in names:
-            r = group.get(name)
-            if r is None:
-                cells.append("")
-            elif ours is None or name == "rtlab":
-                cells.append(f"{r['value']:.4g} {r['unit']}")
-            else:
-                cells.append(f"{r['value']:.4g} {r['unit']} (rtlab {_ratio(ours, r):.2f}x)")
-        lines.append(f"| {case} | {threads} | " + " | ".join(cells) + " |")
-    scaling = format_scaling(rows)
-    if scaling:
-        lines += ["", "Gain from the second thread: " + "; ".join(scaling) + "."]
-    if rows:
-        built = f" Core built by {rows[0]['compiler']}." if rows[0].get("compiler") else ""
-        lines += ["", f"CPU: {rows[0]['machine']}.{built} Command: `{command}`."]
-    return "\n".join(lines) + "\n"
+    return _markdown_table([rows], command, heading=None)
 
 
 def thread_scaling(rows: list[dict[str, Any]]) -> dict[tuple[str, str, str], float]:
@@ -596,13 +566,7 @@ def thread_scaling(rows: list[dict[str, Any]]) -> dict[tuple[str, str, str], flo
 
 def format_scaling(rows: list[dict[str, Any]]) -> list[str]:
     """A line per suite and case: each renderer's gain from the second thread."""
-    gains = thread_scaling(rows)
-    lines = []
-    for suite, case in sorted({(s, c) for s, c, _ in gains}):
-        each = ", ".join(f"{name} {g:.2f}x" for (s, c, name), g in gains.items()
-                         if (s, c) == (suite, case))  # fmt: skip
-        lines.append(f"{suite + ': ' if suite else ''}{case}, 1 -> 2 threads: {each}")
-    return lines
+    return _scaling_lines(summarize_scaling([rows]))
 
 
 # -- several runs -------------------------------------------------------------------------
@@ -763,8 +727,17 @@ def format_summary_markdown(runs: list[list[dict[str, Any]]], command: str) -> s
     """The runs as the README's table: each cell a renderer's median value, and beside rtlab
     the median of rtlab's speed-up over it [its range over the runs]; then the gains from the
     second thread, the CPU, the compiler and the command."""
+    return _markdown_table(runs, command, heading=_runs_heading(len(runs)))
+
+
+def _markdown_table(runs: list[list[dict[str, Any]]], command: str, heading: str | None) -> str:
+    """format_markdown()'s table (one run, heading None) and format_summary_markdown()'s: a
+    cell per renderer, its (median) value and beside rtlab rtlab's speed-up over it, with its
+    range where there are several runs."""
     rows = summarize_runs(runs)
-    names, lines = _table_head(rows)
+    ours_too = any(r["renderer"] == "rtlab" for r in rows)
+    names = (["rtlab"] if ours_too else []) + sorted({r["renderer"] for r in rows} - {"rtlab"})
+    lines = ["| " + " | ".join(["case", "threads", *names]) + " |", "|" + "---|" * (2 + len(names))]
     for case, threads in sorted({(r["case"], r["threads"]) for r in rows}):
         group = {r["renderer"]: r for r in rows if (r["case"], r["threads"]) == (case, threads)}
         cells = []
@@ -784,6 +757,7 @@ def format_summary_markdown(runs: list[list[dict[str, Any]]], command: str) -> s
         lines += ["", "Gain from the second thread: " + "; ".join(scaling) + "."]
     if rows:
         built = f" Core built by {rows[0]['compiler']}." if rows[0].get("compiler") else ""
-        lines += ["", f"{_runs_heading(len(runs))}. CPU: {rows[0].get('machine', '')}.{built} "
+        runs_said = f"{heading}. " if heading else ""
+        lines += ["", f"{runs_said}CPU: {rows[0].get('machine', '')}.{built} "
                   f"Command: `{command}`."]  # fmt: skip
     return "\n".join(lines) + "\n"
