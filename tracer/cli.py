@@ -235,9 +235,9 @@ def cmd_bench(args: argparse.Namespace) -> None:
         # Each run whole, one after the other (its renderers taking turns within it); the rows
         # of all runs go to one file, each with its run's number.
         runs = []
+        out_dir = Path(args.json).parent if args.json else None  # the convergence plots
         for number in range(1, args.runs + 1):
             print(f"run {number} of {args.runs}", flush=True)
-            out_dir = Path(args.json).parent if args.json else None
             made = run_suites(names, None, engine, out_dir=out_dir)
             runs.append([{**r, "run": number} for r in made])
         if args.json:
