@@ -1,0 +1,331 @@
+"""Where a core's time goes in Ex 25's packets, by a model of the processor (issue 12).
+
+``python -m reference.packet_model [--so CORE.so] [--pixel X Y] [--packets N] [--cpu NAME...]``
+
+There are no hardware counters on these machines, so this steps through the packet tracer
+instruction by instruction instead: gdb runs Ex 25 (1920x1024, 1 spp, one thread) in the core
+as ``make`` builds it but with its symbols (core_with_symbols()) or the one ``--so`` names,
+stops at the pixel store of the packet before the one holding pixel (X, Y), and single-steps
+through the next N packets, each from one pixel store to the next. The instructions executed,
+in their order, branches pointed at one label, are then handed to LLVM's machine code analyser
+(``llvm-mca-19 -mcpu=NAME``), which times them on its model of that processor as if every
+branch were foreseen: cycles a packet, instructions a cycle, and the resources that hold it
+back. Its first use: why the Intel Xeon of this machine class (family 6, model 167: Rocket
+Lake) gives rtlab lower ratios than the Zen 4 (reference/speed-log.md). The model counts issue
+ports and dependences, not the stack's traffic nor mispredictions: it says where a core's time
+goes, not which of two builds a few per cent apart is faster (the speed log has two it ranked
+wrongly).
+
+Needs gdb, objdump and llvm-mca-19 (Debian: ``apt-get install gdb binutils llvm-19``), and a
+core built with symbols (``make`` builds one).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+from collections import Counter
+from dataclasses import dataclass
+from pathlib import Path
+
+#: render_tile_packets()'s symbol: the tile loop into which trace() and trace_level() are inlined.
+TILE_SYMBOL = "_ZN2rt19render_tile_packetsERKNS_13PacketCullingERKNS_5SceneEiiiiPfRNS_9RayCountsE"
+
+#: The vector additions, subtractions, multiplications, divisions and square roots of doubles.
+VECTOR_ARITHMETIC = re.compile(r"^v(add|sub|mul|div|sqrt)pd$")
+
+# gdb's own Python: skip IGNORE pixel stores, stop at the next (that of packet IGNORE, 0-based),
+# then step through PACKETS more, writing each instruction's offset in the core and its text.
+GDB_SCRIPT = """
+import gdb, os
+sym, store, fn_off = os.environ["PM_SYMBOL"], int(os.environ["PM_STORE"], 16), \\
+    int(os.environ["PM_FN"], 16)
+ignore, packets, out = int(os.environ["PM_IGNORE"]), int(os.environ["PM_PACKETS"]), \\
+    open(os.environ["PM_OUT"], "w")
+for c in ("set pagination off", "set confirm off", "set breakpoint pending on",
+          "set disassembly-flavor att", f"break {sym}"):
+    gdb.execute(c)
+gdb.execute("run", to_string=True)
+base = int(gdb.parse_and_eval(f"(long)&{sym}")) - fn_off
+gdb.execute("delete")
+gdb.execute(f"break *{base + store:#x}")
+if ignore > 0:
+    gdb.execute(f"ignore 2 {ignore}")
+gdb.execute("continue", to_string=True)
+done = 0
+while done < packets:
+    gdb.execute("stepi", to_string=True)
+    pc = int(gdb.parse_and_eval("$pc"))
+    if pc == base + store:
+        done += 1
+        out.write("#packet\\n")
+        continue
+    text = gdb.execute(f"x/i {pc:#x}", to_string=True).strip().replace("=> ", "")
+    out.write(f"{pc - base:x}\\t{text.split(':', 1)[1].strip()}\\n")
+out.close()
+gdb.execute("kill")
+"""
+
+# The traced process: Ex 25 rendered over and over on one thread by the core at argv[1].
+RENDER_LOOP = """
+import importlib.util, sys, time
+spec = importlib.util.spec_from_file_location("tracer._core", sys.argv[1])
+core_module = importlib.util.module_from_spec(spec)
+sys.modules["tracer._core"] = core_module
+spec.loader.exec_module(core_module)
+from tracer.render import core_integrator, to_core
+from tracer.scene import load_scene
+from tracer.scenes import demo_scene_path
+scene = load_scene(demo_scene_path()).with_overrides(width=int(sys.argv[2]),
+                                                     height=int(sys.argv[3]), spp=1)
+core, integrator = to_core(scene), core_integrator(scene, True)
+start = time.perf_counter()
+while time.perf_counter() - start < 600:
+    core_module.render(core, 1, None, integrator, True)
+"""
+
+
+class ModelError(RuntimeError):
+    """A tool missing, a core without the symbols needed, or a trace that did not come."""
+
+
+def tile_side(width: int, height: int, threads: int = 1) -> int:
+    """11_render.h tile_side(): 16, or 8 where tiles of 16 would give each thread fewer than 16."""
+    tiles = -(-width // 16) * -(-height // 16)
+    return 16 if tiles >= 16 * threads else 8
+
+
+def packet_index(x: int, y: int, width: int, height: int, rays_per_packet: int) -> int:
+    """The 0-based place, in a one-thread render of one sample a pixel, of the packet that holds
+    pixel (x, y): 11_render.h's one worker takes the tiles in order, row of tiles by row of
+    tiles, and 12_packet.h render_tile_packets() a tile's rows top down, each in packets of
+    rays_per_packet pixels from its left edge (the last one of a row maybe shorter)."""
+    if not (0 <= x < width and 0 <= y < height):
+        raise ValueError(f"pixel ({x}, {y}) is outside the {width}x{height} image")
+    side = tile_side(width, height)
+    tiles_x = -(-width // side)
+
+    def packets_in(tx: int, ty: int, rows: int) -> int:  # in the first `rows` rows of a tile
+        tile_w = min(side, width - tx * side)
+        return min(rows, height - ty * side) * -(-tile_w // rays_per_packet)
+
+    tile_x, tile_y = x // side, y // side
+    before = sum(packets_in(tx, ty, side) for ty in range(tile_y) for tx in range(tiles_x))
+    before += sum(packets_in(tx, tile_y, side) for tx in range(tile_x))
+    return before + packets_in(tile_x, tile_y, y - tile_y * side) + (x % side) // rays_per_packet
+
+
+def trace_to_asm(lines: list[str]) -> str:
+    """A trace's instructions (``offset<TAB>text`` lines as gdb printed them) as assembly that
+    llvm-mca reads: gdb's comments and symbol names dropped, every jump aimed at one label at
+    the top (the model runs the block straight through, as if every branch were foreseen), and
+    calls left out (a call leaves the traced function; its instructions follow in the trace)."""
+    out = [".Ltrace:"]
+    for line in lines:
+        if "\t" not in line:
+            continue
+        text = line.split("\t", 1)[1].split("#")[0]
+        text = re.sub(r"\s*<[^>]*>", "", text).strip()
+        jump = re.match(r"(j[a-z]+)\s", text)
+        if text.startswith("call"):
+            continue
+        out.append(f"  {jump.group(1)} .Ltrace" if jump else f"  {text}")
+    return "\n".join(out) + "\n"
+
+
+@dataclass
+class CoreModel:
+    """llvm-mca's account of a block on one processor."""
+
+    cpu: str
+    instructions: int
+    cycles: int
+    iterations: int
+    bottlenecks: dict[str, float]  # resource: share of cycles it held back (per cent)
+
+    def per_iteration(self) -> float:
+        return self.cycles / self.iterations
+
+
+def parse_mca(cpu: str, text: str) -> CoreModel:
+    """llvm-mca's summary (with -bottleneck-analysis): its totals and resource pressures."""
+
+    def number(label: str) -> int:
+        found = re.search(rf"^{label}:\s+(\d+)", text, re.M)
+        if found is None:
+            raise ModelError(f"llvm-mca for {cpu} printed no {label!r}:\n{text[:2000]}")
+        return int(found.group(1))
+
+    section = text.split("Resource Pressure", 1)[1] if "Resource Pressure" in text else ""
+    bottlenecks = {
+        m.group(1): float(m.group(2))
+        for m in re.finditer(r"^\s+-\s+(\S+)\s+\[\s*([\d.]+)%\s*\]", section.split("\n\n")[0], re.M)
+    }
+    return CoreModel(cpu, number("Instructions"), number("Total Cycles"), number("Iterations"),
+                     bottlenecks)  # fmt: skip
+
+
+def _tool(name: str) -> str:
+    found = shutil.which(name)
+    if found is None:
+        raise ModelError(f"{name} is not installed (Debian: apt-get install gdb binutils llvm-19)")
+    return found
+
+
+def store_offsets(so: Path) -> tuple[int, int]:
+    """render_tile_packets()'s offset in the core and that of its first conversion of a packet's
+    colours to float (store_pixels(), inlined: one per packet of one sample a pixel)."""
+    symbols = subprocess.run([_tool("nm"), str(so)], capture_output=True, text=True, check=True)
+    found = re.search(rf"^([0-9a-f]+) [tT] {TILE_SYMBOL}$", symbols.stdout, re.M)
+    if found is None:
+        raise ModelError(f"{so}: no symbol render_tile_packets (a core built without symbols?)")
+    fn = int(found.group(1), 16)
+    listing = subprocess.run(
+        [_tool("objdump"), "-d", "--no-show-raw-insn", f"--start-address={fn:#x}",
+         f"--stop-address={fn + 0x8000:#x}", str(so)],
+        capture_output=True, text=True, check=True,
+    )  # fmt: skip
+    store = re.search(r"^\s*([0-9a-f]+):\s+vcvtpd2ps\s", listing.stdout, re.M)
+    if store is None:
+        raise ModelError(f"{so}: no vcvtpd2ps in render_tile_packets (store_pixels() changed?)")
+    return fn, int(store.group(1), 16)
+
+
+def core_with_symbols() -> Path:
+    """The core built as `make` builds it (Clang 19, -O3, this machine's vector units) but with
+    its symbols and line tables (RelWithDebInfo; the compile options the CMakeLists gives,
+    -O3 among them, come after the build type's), in build/packet-model: the installed core,
+    like nanobind's every release build, has its symbols stripped."""
+    repo = Path(__file__).resolve().parent.parent
+    build, bin_dir = repo / "build" / "packet-model", Path(sys.executable).parent
+    cmake_dir = subprocess.run(
+        [sys.executable, "-m", "nanobind", "--cmake_dir"], capture_output=True, text=True
+    ).stdout.strip()
+    for command in (
+        [str(bin_dir / "cmake"), "-S", str(repo), "-B", str(build), "-G", "Ninja",
+         f"-DCMAKE_MAKE_PROGRAM={bin_dir / 'ninja'}", "-DCMAKE_BUILD_TYPE=RelWithDebInfo",
+         f"-DCMAKE_CXX_COMPILER={_tool('clang++-19')}", f"-Dnanobind_DIR={cmake_dir}",
+         f"-DPython_EXECUTABLE={sys.executable}"],
+        [str(bin_dir / "cmake"), "--build", str(build)],
+    ):  # fmt: skip
+        done = subprocess.run(command, capture_output=True, text=True)
+        if done.returncode != 0:
+            raise ModelError(f"{' '.join(command[:2])} failed:\n{done.stdout[-2000:]}{done.stderr}")
+    built = sorted(build.glob("_core*.so"))
+    if not built:
+        raise ModelError(f"the build in {build} made no _core*.so")
+    return built[0]
+
+
+def trace_packets(so: Path, x: int, y: int, packets: int, width: int, height: int,
+                  rays_per_packet: int) -> list[list[str]]:  # fmt: skip
+    """The instructions of `packets` packets from the one holding pixel (x, y), one list each."""
+    fn, store = store_offsets(so)
+    first = packet_index(x, y, width, height, rays_per_packet)
+    if first == 0:
+        raise ModelError("the first packet has no store before it to stop at: pick another pixel")
+    repo = Path(__file__).resolve().parent.parent
+    with tempfile.TemporaryDirectory() as tmp:
+        script, out, loop = Path(tmp, "trace.py"), Path(tmp, "trace.txt"), Path(tmp, "loop.py")
+        script.write_text(GDB_SCRIPT)
+        loop.write_text(RENDER_LOOP)
+        env = {**os.environ, "PM_SYMBOL": TILE_SYMBOL, "PM_STORE": f"{store:x}",
+               "PM_FN": f"{fn:x}", "PM_PACKETS": str(packets),
+               "PM_IGNORE": str(first - 1), "PM_OUT": str(out),
+               "PYTHONPATH": str(repo), "OPENBLAS_NUM_THREADS": "1"}  # fmt: skip
+        done = subprocess.run(
+            [_tool("gdb"), "-q", "-batch", "-x", str(script), "--args", sys.executable,
+             str(loop), str(so), str(width), str(height)],
+            env=env, cwd=repo, capture_output=True, text=True, timeout=1800,
+        )  # fmt: skip
+        if not out.exists():
+            raise ModelError(f"gdb wrote no trace:\n{done.stdout[-2000:]}\n{done.stderr[-2000:]}")
+        lines = out.read_text().splitlines()
+    # From packet first - 1's store to packet first's is the end of that store and the whole
+    # of packet first: each stretch between two stores is one packet.
+    chunks: list[list[str]] = [[]]
+    for line in lines:
+        if line == "#packet":
+            chunks.append([])
+        else:
+            chunks[-1].append(line)
+    whole = chunks[:packets]
+    if len(whole) < packets or not all(whole):
+        raise ModelError(f"the trace holds {len(whole)} whole packets of the {packets} asked for")
+    return whole
+
+
+def model(asm: str, cpu: str, iterations: int = 20) -> CoreModel:
+    """The block timed by llvm-mca-19 on its model of `cpu` (repeated `iterations` times)."""
+    done = subprocess.run(
+        [_tool("llvm-mca-19"), f"-mcpu={cpu}", f"-iterations={iterations}",
+         "-bottleneck-analysis", "-instruction-info=false", "-resource-pressure=false"],
+        input=asm, capture_output=True, text=True,
+    )  # fmt: skip
+    if done.returncode != 0:
+        raise ModelError(f"llvm-mca-19 -mcpu={cpu} failed:\n{done.stderr[-2000:]}")
+    return parse_mca(cpu, done.stdout)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="python -m reference.packet_model",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument(
+        "--so",
+        type=Path,
+        help="the core to trace (default: one built as make builds it, with symbols)",
+    )
+    parser.add_argument(
+        "--pixel", type=int, nargs=2, default=(160, 705), metavar=("X", "Y"),
+        help="the first packet's pixel (default: floor, left of the red sphere)",
+    )  # fmt: skip
+    parser.add_argument("--packets", type=int, default=4)
+    parser.add_argument(
+        "--cpu", action="append",
+        help="llvm-mca's -mcpu (default: znver4 and rocketlake, this machine class's two)",
+    )  # fmt: skip
+    parser.add_argument("--size", type=int, nargs=2, default=(1920, 1024), metavar=("W", "H"))
+    args = parser.parse_args(argv)
+    try:
+        import importlib.util
+
+        so = args.so or core_with_symbols()
+        # Loaded here as the traced process loads it, for its packet width.
+        spec = importlib.util.spec_from_file_location("tracer._core", so)
+        assert spec is not None and spec.loader is not None
+        core_module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(core_module)
+        width, height = args.size
+        packets = trace_packets(so, *args.pixel, args.packets, width, height,
+                                core_module.rays_per_packet)  # fmt: skip
+        lines = [line for packet in packets for line in packet]
+        mnemonics = Counter(line.split("\t", 1)[1].split()[0] for line in lines)
+        arithmetic = sum(n for m, n in mnemonics.items() if VECTOR_ARITHMETIC.match(m))
+        n = len(packets)
+        print(f"{so}: {n} packets of {core_module.rays_per_packet} rays from pixel "
+              f"{tuple(args.pixel)}: {len(lines) / n:.0f} instructions a packet, "
+              f"{arithmetic / n:.0f} of them vector add/sub/mul/div/sqrt")  # fmt: skip
+        for cpu in args.cpu or ["znver4", "rocketlake"]:
+            m = model(trace_to_asm(lines), cpu)
+            held = ", ".join(f"{r} {p:.0f}%" for r, p in
+                             sorted(m.bottlenecks.items(), key=lambda kv: -kv[1])[:3])  # fmt: skip
+            print(
+                f"  {cpu:<12} {m.per_iteration() / n:7.0f} cycles a packet, "
+                f"{m.instructions / m.cycles:.2f} instructions a cycle; held back by {held}"
+            )
+    except ModelError as e:
+        print(f"packet_model: {e}", file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

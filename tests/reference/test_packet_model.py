@@ -1,0 +1,95 @@
+"""reference/packet_model.py: which packet a pixel's is, the trace as llvm-mca's input, and
+llvm-mca's summary read back. (Tracing itself needs gdb and llvm-mca-19, which `make` does
+not install: the tool is run by hand, reference/speed-log.md.)"""
+
+from __future__ import annotations
+
+import pytest
+
+from reference.packet_model import packet_index, parse_mca, tile_side, trace_to_asm
+
+
+def test_tile_side_follows_11_render_h() -> None:
+    # 11_render.h: a 64 x 64 image had 16 tiles of 16 x 16 for 2 threads; it gets tiles of 8.
+    assert tile_side(64, 64, threads=2) == 8
+    assert tile_side(64, 64, threads=1) == 16  # 16 tiles of 16: enough for one thread
+    assert tile_side(1920, 1024) == 16
+
+
+def test_packet_index_counts_tiles_rows_and_packets() -> None:
+    # Ex 25 at 1920x1024: tiles of 16 x 16, 120 a row, 2 packets of 8 a tile's row.
+    assert packet_index(0, 0, 1920, 1024, 8) == 0
+    assert packet_index(8, 0, 1920, 1024, 8) == 1
+    assert packet_index(0, 1, 1920, 1024, 8) == 2  # the tile's next row, not the image's
+    assert packet_index(16, 0, 1920, 1024, 8) == 32  # the next tile
+    assert packet_index(0, 16, 1920, 1024, 8) == 120 * 32  # the next row of tiles
+    # The speed log's packets: tile 44 * 120 + 10, its row 1, packet 0.
+    assert packet_index(160, 705, 1920, 1024, 8) == (44 * 120 + 10) * 32 + 2
+    # Packets of 4 (the AVX2 build): four a tile's row.
+    assert packet_index(164, 705, 1920, 1024, 4) == (44 * 120 + 10) * 64 + 4 + 1
+
+
+def test_packet_index_at_ragged_edges() -> None:
+    # 20 x 12: tiles of 8 (its 2 tiles of 16 are fewer than 16), 3 across (8, 8, 4 wide), 2 down
+    # (8, 4 high); one packet of 8 per tile row, the last tile's 4 wide.
+    assert packet_index(17, 3, 20, 12, 8) == 8 + 8 + 3
+    assert packet_index(19, 11, 20, 12, 8) == 24 + 4 + 4 + 3
+    with pytest.raises(ValueError, match=r"pixel \(20, 0\) is outside the 20x12 image"):
+        packet_index(20, 0, 20, 12, 8)
+
+
+def test_trace_to_asm_aims_jumps_at_one_label_and_drops_gdb_annotations() -> None:
+    trace = [
+        "2709a\tvmovaps 0x387fe(%rip),%ymm5        # 0x7ffff73308a0",
+        "27127\tjge    0x7ffff72fb2a0 <_ZN2rt19render_tile_packetsERKNS_13PacketCullingE+14960>",
+        "27130\tcall   0x7ffff72f0000 <_ZN2rt5powerEDv8_dS0_>",
+        "#packet",
+        "27135\tvmulpd %zmm1,%zmm2,%zmm3",
+    ]
+    assert trace_to_asm(trace) == (
+        ".Ltrace:\n  vmovaps 0x387fe(%rip),%ymm5\n  jge .Ltrace\n  vmulpd %zmm1,%zmm2,%zmm3\n"
+    )
+
+
+# llvm-mca-19 -mcpu=rocketlake -iterations=100 -bottleneck-analysis -instruction-info=false
+# -resource-pressure=false on two multiplies, two adds, a division and a loop's count (its
+# output, cut after the part read, a trailing space taken off).
+MCA_OUTPUT = """Iterations:        100
+Instructions:      700
+Total Cycles:      1614
+Total uOps:        900
+
+Dispatch Width:    6
+uOps Per Cycle:    0.56
+IPC:               0.43
+Block RThroughput: 16.0
+
+
+Cycles with backend pressure increase [ 19.14% ]
+Throughput Bottlenecks:
+  Resource Pressure       [ 19.14% ]
+  - ICXFPDivider  [ 18.90% ]
+  - ICXPort0  [ 16.23% ]
+  - ICXPort5  [ 1.98% ]
+  Data Dependencies:      [ 3.47% ]
+  - Register Dependencies [ 3.47% ]
+  - Memory Dependencies   [ 0.00% ]
+
+Critical sequence based on the simulation:
+"""
+
+
+def test_parse_mca_reads_totals_and_resources() -> None:
+    m = parse_mca("rocketlake", MCA_OUTPUT)
+    assert (m.instructions, m.cycles, m.iterations) == (700, 1614, 100)
+    assert m.per_iteration() == pytest.approx(16.14)
+    assert m.bottlenecks == {"ICXFPDivider": 18.90, "ICXPort0": 16.23, "ICXPort5": 1.98}
+
+
+def test_parse_mca_without_bottlenecks_and_without_totals() -> None:
+    quiet = MCA_OUTPUT.split("Cycles with")[0] + "No resource or data dependency bottlenecks"
+    assert parse_mca("znver4", quiet).bottlenecks == {}
+    from reference.packet_model import ModelError
+
+    with pytest.raises(ModelError, match="llvm-mca for znver4 printed no 'Total Cycles'"):
+        parse_mca("znver4", "Iterations: 1\nInstructions: 2\n")
