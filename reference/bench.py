@@ -400,11 +400,18 @@ def suite_convergence(
 
 
 def cornell_scaling(
-    sizes: tuple[int, ...] = (64, 128), spp: int = 64, repeats: int = 3
+    sizes: tuple[int, ...] = (64, 128), spp: int = 64, repeats: int = 5
 ) -> list[dict[str, Any]]:
     """The convergence rows are timed on every core; these time rtlab's Cornell box path
     tracer on 1 and 2 threads (one spp, the best of `repeats` interleaved renders), so that the
-    suite's gain from the second thread can be read like the others'."""
+    suite's gain from the second thread can be read like the others'.
+
+    Five repeats, not three: a 2-thread render needs both cores, and on the Zen 4 of
+    2026-12-05 one of three runs of `rtlab bench convergence` gave 1.75x at 64x64 (its three
+    2-thread renders 159 ms or more, the other runs' 139-140 ms, the 1-thread renders the
+    same 278 ms in all three), where the scaling alone gave 1.89x to 2.00x in seven tries:
+    something held a core for the second or so the three renders span. Five span about two
+    seconds at 64x64 (and eight at 128x128) for some 4 s more a run."""
     scene = load_scene(Path(__file__).resolve().parent / "scenes" / "cornell_box.toml")
     rows = []
     for size in sizes:
