@@ -67,8 +67,11 @@ demo: setup
 	$(VENV)/bin/rtlab demo --out-dir out
 
 # Speed side by side (a benchmark, not a test): every suite, JSON rows in out/bench.json.
+# `make bench BENCH_RUNS=5`: five runs, summarised as medians with the range of each ratio
+# (these machines drift by 20% from hour to hour; the README's tables are five runs).
+BENCH_RUNS ?= 1
 bench: setup
-	$(VENV)/bin/rtlab bench all --json out/bench.json --markdown out/bench.md
+	$(VENV)/bin/rtlab bench all --runs $(BENCH_RUNS) --json out/bench.json --markdown out/bench.md
 
 lint: setup
 	$(VENV)/bin/ruff check .
