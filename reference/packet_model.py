@@ -177,6 +177,19 @@ def _tool(name: str) -> str:
     return found
 
 
+def packet_store(listing: str) -> int | None:
+    """In objdump's listing of render_tile_packets(), where a whole packet's colours become
+    floats: three conversions in a row, of the widest vectors the build has (a lone one serves
+    a short packet, or a sample's sum)."""
+    lines = re.findall(r"^\s*([0-9a-f]+):\s+(\S+)\s*(\S*)", listing, re.M)
+    runs: dict[str, int] = {}
+    for k in range(len(lines) - 2):
+        widths = {re.sub(r"^%([xyz])mm.*", r"\1", lines[k + j][2]) for j in range(3)}
+        if all(lines[k + j][1] == "vcvtpd2ps" for j in range(3)) and len(widths) == 1:
+            runs.setdefault(widths.pop(), int(lines[k][0], 16))
+    return next((runs[w] for w in "zyx" if w in runs), None)
+
+
 def store_offsets(so: Path) -> tuple[int, int]:
     """render_tile_packets()'s offset in the core and that of its first conversion of a whole
     packet's colours to float (store_pixels(), inlined: one per packet of one sample a pixel)."""
@@ -190,18 +203,10 @@ def store_offsets(so: Path) -> tuple[int, int]:
          f"--stop-address={fn + 0x8000:#x}", str(so)],
         capture_output=True, text=True, check=True,
     )  # fmt: skip
-    # A whole packet's colours are three conversions in a row, of the widest vectors the build
-    # has (a lone one serves a short packet, or a sample's sum).
-    lines = re.findall(r"^\s*([0-9a-f]+):\s+(\S+)\s*(\S*)", listing.stdout, re.M)
-    runs: dict[str, int] = {}
-    for k in range(len(lines) - 2):
-        widths = {re.sub(r"^%([xyz])mm.*", r"\1", lines[k + j][2]) for j in range(3)}
-        if all(lines[k + j][1] == "vcvtpd2ps" for j in range(3)) and len(widths) == 1:
-            runs.setdefault(widths.pop(), int(lines[k][0], 16))
-    for width in "zyx":
-        if width in runs:
-            return fn, runs[width]
-    raise ModelError(f"{so}: no vcvtpd2ps in render_tile_packets (store_pixels() changed?)")
+    store = packet_store(listing.stdout)
+    if store is None:
+        raise ModelError(f"{so}: no vcvtpd2ps in render_tile_packets (store_pixels() changed?)")
+    return fn, store
 
 
 def core_with_symbols() -> Path:

@@ -6,7 +6,13 @@ from __future__ import annotations
 
 import pytest
 
-from reference.packet_model import packet_index, parse_mca, tile_side, trace_to_asm
+from reference.packet_model import (
+    packet_index,
+    packet_store,
+    parse_mca,
+    tile_side,
+    trace_to_asm,
+)
 
 
 def test_tile_side_follows_11_render_h() -> None:
@@ -93,3 +99,25 @@ def test_parse_mca_without_bottlenecks_and_without_totals() -> None:
 
     with pytest.raises(ModelError, match="llvm-mca for znver4 printed no 'Total Cycles'"):
         parse_mca("znver4", "Iterations: 1\nInstructions: 2\n")
+
+
+# objdump's listing of render_tile_packets() in a -march=rocketlake build (lines of it): a lone
+# conversion of a short packet comes first, then a whole packet's three.
+LISTING = """
+   26352:	vcvtpd2ps %xmm9,%xmm9
+   2650f:	vcvtpd2ps %zmm9,%ymm9
+   26515:	vpermps %ymm9,%ymm5,%ymm10
+   268c2:	data16 data16 data16 data16 cs nopw 0x0(%rax,%rax,1)
+   268d0:	vcvtpd2ps %zmm7,%ymm0
+   268d6:	vcvtpd2ps %zmm1,%ymm1
+   268dc:	vcvtpd2ps %zmm4,%ymm2
+   268e2:	vmovaps %ymm0,%ymm4
+"""
+
+
+def test_packet_store_is_three_conversions_of_the_widest_vectors() -> None:
+    assert packet_store(LISTING) == 0x268D0
+    # An AVX2 build's three are of 256-bit vectors; a listing without three in a row has none.
+    avx2 = LISTING.replace("%zmm", "%ymm").replace(",%ymm0", ",%xmm0")
+    assert packet_store(avx2) == 0x268D0
+    assert packet_store(LISTING.replace("268d6:\tvcvtpd2ps", "268d6:\tvmovaps")) is None
