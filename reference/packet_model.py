@@ -30,6 +30,7 @@ import subprocess
 import sys
 import tempfile
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -177,17 +178,18 @@ def _tool(name: str) -> str:
     return found
 
 
-def packet_store(listing: str) -> int | None:
+def packet_store(listing: str, source_line: Callable[[int], str]) -> int | None:
     """In objdump's listing of render_tile_packets(), where a whole packet's colours become
-    floats: three conversions in a row, of the widest vectors the build has (a lone one serves
-    a short packet, or a sample's sum)."""
-    lines = re.findall(r"^\s*([0-9a-f]+):\s+(\S+)\s*(\S*)", listing, re.M)
-    runs: dict[str, int] = {}
-    for k in range(len(lines) - 2):
-        widths = {re.sub(r"^%([xyz])mm.*", r"\1", lines[k + j][2]) for j in range(3)}
-        if all(lines[k + j][1] == "vcvtpd2ps" for j in range(3)) and len(widths) == 1:
-            runs.setdefault(widths.pop(), int(lines[k][0], 16))
-    return next((runs[w] for w in "zyx" if w in runs), None)
+    floats: the first conversion of the widest vectors the build has whose source line
+    (`source_line(address)`, from the core's line tables) is store_pixels()'s
+    __builtin_convertvector() of a packet's colour. (The compiler may interleave the three
+    with other work, and it converts vectors elsewhere too: a sample's sum, a short packet.)"""
+    found = re.findall(r"^\s*([0-9a-f]+):\s+vcvtpd2ps\s+%([xyz])mm", listing, re.M)
+    for width in "zyx":
+        for address in (int(a, 16) for a, w in found if w == width):
+            if "__builtin_convertvector(c." in source_line(address):
+                return address
+    return None
 
 
 def store_offsets(so: Path) -> tuple[int, int]:
@@ -203,9 +205,24 @@ def store_offsets(so: Path) -> tuple[int, int]:
          f"--stop-address={fn + 0x8000:#x}", str(so)],
         capture_output=True, text=True, check=True,
     )  # fmt: skip
-    store = packet_store(listing.stdout)
+    sources: dict[str, list[str]] = {}
+
+    def source_line(address: int) -> str:
+        where = subprocess.run(
+            [_tool("addr2line"), "-e", str(so), f"{address:#x}"], capture_output=True, text=True
+        ).stdout.strip()
+        path, _, line = where.rpartition(":")
+        if path not in sources:
+            sources[path] = Path(path).read_text().splitlines() if Path(path).is_file() else []
+        number = int(line.split()[0]) if line.split() and line.split()[0].isdigit() else 0
+        return sources[path][number - 1] if 0 < number <= len(sources[path]) else ""
+
+    store = packet_store(listing.stdout, source_line)
     if store is None:
-        raise ModelError(f"{so}: no vcvtpd2ps in render_tile_packets (store_pixels() changed?)")
+        raise ModelError(
+            f"{so}: no packet's store found in render_tile_packets (a core without line tables? "
+            "store_pixels() changed?)"
+        )
     return fn, store
 
 

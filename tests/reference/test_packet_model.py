@@ -101,23 +101,31 @@ def test_parse_mca_without_bottlenecks_and_without_totals() -> None:
         parse_mca("znver4", "Iterations: 1\nInstructions: 2\n")
 
 
-# objdump's listing of render_tile_packets() in a -march=rocketlake build (lines of it): a lone
-# conversion of a short packet comes first, then a whole packet's three.
+# objdump's listing of render_tile_packets() in a -march=rocketlake build (lines of it), and
+# the source lines its line tables give for the conversions: a lone conversion of another
+# path comes first, then a whole packet's three, interleaved with a move.
 LISTING = """
-   26352:	vcvtpd2ps %xmm9,%xmm9
-   2650f:	vcvtpd2ps %zmm9,%ymm9
-   26515:	vpermps %ymm9,%ymm5,%ymm10
-   268c2:	data16 data16 data16 data16 cs nopw 0x0(%rax,%rax,1)
-   268d0:	vcvtpd2ps %zmm7,%ymm0
-   268d6:	vcvtpd2ps %zmm1,%ymm1
-   268dc:	vcvtpd2ps %zmm4,%ymm2
-   268e2:	vmovaps %ymm0,%ymm4
+   26352:\tvcvtpd2ps %xmm9,%xmm9
+   2650f:\tvcvtpd2ps %zmm9,%ymm9
+   26515:\tvpermps %ymm9,%ymm5,%ymm10
+   268c2:\tdata16 data16 data16 data16 cs nopw 0x0(%rax,%rax,1)
+   268d0:\tvcvtpd2ps %zmm7,%ymm0
+   268d6:\tvmovaps 0x39462(%rip),%ymm4
+   268de:\tvcvtpd2ps %zmm1,%ymm1
+   268e4:\tvcvtpd2ps %zmm4,%ymm2
 """
+SOURCE = {
+    0x26352: "    px[0] = float(color.r), px[1] = float(color.g), px[2] = float(color.b);",
+    0x2650F: "    px[0] = float(color.r), px[1] = float(color.g), px[2] = float(color.b);",
+    0x268D0: "        const FloatLanes r = __builtin_convertvector(c.r, FloatLanes),",
+    0x268DE: "                         g = __builtin_convertvector(c.g, FloatLanes),",
+    0x268E4: "                         b = __builtin_convertvector(c.b, FloatLanes);",
+}
 
 
-def test_packet_store_is_three_conversions_of_the_widest_vectors() -> None:
-    assert packet_store(LISTING) == 0x268D0
-    # An AVX2 build's three are of 256-bit vectors; a listing without three in a row has none.
-    avx2 = LISTING.replace("%zmm", "%ymm").replace(",%ymm0", ",%xmm0")
-    assert packet_store(avx2) == 0x268D0
-    assert packet_store(LISTING.replace("268d6:\tvcvtpd2ps", "268d6:\tvmovaps")) is None
+def test_packet_store_is_store_pixels_conversion_of_the_widest_vectors() -> None:
+    assert packet_store(LISTING, SOURCE.__getitem__) == 0x268D0
+    # An AVX2 build's conversions are of 256-bit vectors.
+    assert packet_store(LISTING.replace("%zmm", "%ymm"), SOURCE.__getitem__) == 0x268D0
+    # Without line tables (every source line unknown) there is none to stop at.
+    assert packet_store(LISTING, lambda address: "") is None
