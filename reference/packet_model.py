@@ -13,11 +13,12 @@ branch were foreseen: cycles a packet, instructions a cycle, and the resources t
 back. Its first use: why the Intel Xeon of this machine class (family 6, model 167: Rocket
 Lake) gives rtlab lower ratios than the Zen 4 (reference/speed-log.md). The model counts issue
 ports and dependences, not the stack's traffic nor mispredictions: it says where a core's time
-goes, not which of two builds a few per cent apart is faster (the speed log has two it ranked
+goes, not which of two builds a few per cent apart is faster (the speed log has three it ranked
 wrongly).
 
-Needs gdb, objdump and llvm-mca-19 (Debian: ``apt-get install gdb binutils llvm-19``), and a
-core built with symbols (``make`` builds one).
+Needs gdb, binutils (nm, objdump, addr2line) and llvm-mca-19 (Debian: ``apt-get install gdb
+binutils llvm-19``), which ``make`` does not install, and a core with symbols and line tables:
+core_with_symbols() builds one (Clang 19, as ``make``) in build/packet-model.
 """
 
 from __future__ import annotations
