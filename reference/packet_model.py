@@ -196,14 +196,16 @@ def packet_store(listing: str, source_line: Callable[[int], str]) -> int | None:
 def store_offsets(so: Path) -> tuple[int, int]:
     """render_tile_packets()'s offset in the core and that of its first conversion of a whole
     packet's colours to float (store_pixels(), inlined: one per packet of one sample a pixel)."""
-    symbols = subprocess.run([_tool("nm"), str(so)], capture_output=True, text=True, check=True)
-    found = re.search(rf"^([0-9a-f]+) [tT] {TILE_SYMBOL}$", symbols.stdout, re.M)
+    symbols = subprocess.run(
+        [_tool("nm"), "--print-size", str(so)], capture_output=True, text=True, check=True
+    )
+    found = re.search(rf"^([0-9a-f]+) ([0-9a-f]+) [tT] {TILE_SYMBOL}$", symbols.stdout, re.M)
     if found is None:
         raise ModelError(f"{so}: no symbol render_tile_packets (a core built without symbols?)")
-    fn = int(found.group(1), 16)
+    fn, size = int(found.group(1), 16), int(found.group(2), 16)
     listing = subprocess.run(
         [_tool("objdump"), "-d", "--no-show-raw-insn", f"--start-address={fn:#x}",
-         f"--stop-address={fn + 0x8000:#x}", str(so)],
+         f"--stop-address={fn + size:#x}", str(so)],
         capture_output=True, text=True, check=True,
     )  # fmt: skip
     sources: dict[str, list[str]] = {}
