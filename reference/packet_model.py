@@ -1,6 +1,7 @@
 """Where a core's time goes in Ex 25's packets, by a model of the processor (issue 12).
 
-``python -m reference.packet_model [--so CORE.so] [--pixel X Y] [--packets N] [--cpu NAME...]``
+``python -m reference.packet_model [--so CORE.so] [--pixel X Y] [--packets N] [--cpu NAME...]
+[--where N]``
 
 There are no hardware counters on these machines, so this steps through the packet tracer
 instruction by instruction instead: gdb runs Ex 25 (1920x1024, 1 spp, one thread) in the core
@@ -14,7 +15,9 @@ back. Its first use: why the Intel Xeon of this machine class (family 6, model 1
 Lake) gives rtlab lower ratios than the Zen 4 (reference/speed-log.md). The model counts issue
 ports and dependences, not the stack's traffic nor mispredictions: it says where a core's time
 goes, not which of two builds a few per cent apart is faster (the speed log has three it ranked
-wrongly).
+wrongly). ``--where N`` also lists where in the source the instructions came from: by step (the
+line of trace_level(), trace() or render_tile_packets() each was inlined from, read from the
+core's inlining chains by addr2line) and by the innermost function.
 
 Needs gdb, binutils (nm, objdump, addr2line) and llvm-mca-19 (Debian: ``apt-get install gdb
 binutils llvm-19``), which ``make`` does not install, and a core with symbols and line tables:
@@ -293,6 +296,82 @@ def trace_packets(so: Path, x: int, y: int, packets: int, width: int, height: in
     return whole
 
 
+def source_places(so: Path, offsets: list[int]) -> dict[int, list[tuple[str, str]]]:
+    """Each offset's chain of inlined source functions, innermost first, by one addr2line run."""
+    unique = sorted(set(offsets))
+    done = subprocess.run(
+        [_tool("addr2line"), "-a", "-f", "-i", "-C", "-e", str(so)],
+        input="\n".join(f"{o:#x}" for o in unique), capture_output=True, text=True, check=True,
+    )  # fmt: skip
+    return parse_addr2line(done.stdout)
+
+
+def parse_addr2line(text: str) -> dict[int, list[tuple[str, str]]]:
+    """addr2line -a -f -i output read back: after each address line (0x...), pairs of a function
+    and a path:line, innermost first (the first pair's line is the instruction's own, each
+    further pair's the line in that function that the pair before was inlined at). Functions
+    lose their arguments and the rt:: prefix, paths their folders."""
+    places: dict[int, list[tuple[str, str]]] = {}
+    chain: list[tuple[str, str]] = []
+    lines = text.splitlines()
+    k = 0
+    while k < len(lines):
+        if re.fullmatch(r"0x[0-9a-f]+", lines[k]):
+            chain = places.setdefault(int(lines[k], 16), [])
+            k += 1
+            continue
+        function = re.sub(r"\(.*", "", lines[k]).removeprefix("rt::")
+        path, _, line = (
+            (lines[k + 1] if k + 1 < len(lines) else "??:0").partition(" ")[0].rpartition(":")
+        )
+        chain.append((function, f"{Path(path).name}:{line}"))
+        k += 2
+    return places
+
+
+#: The functions whose lines name a step of the classic algorithm, the most specific first: an
+#: instruction is counted at the line of the first of these its inlining chain passes through.
+STEP_FUNCTIONS = ("trace_level", "trace", "render_tile_packets")
+
+
+def step_of(chain: list[tuple[str, str]]) -> str:
+    """The step an instruction belongs to: `file:line` in the first of STEP_FUNCTIONS met
+    going outward along its inlining chain (the line inside that function)."""
+    for wanted in STEP_FUNCTIONS:
+        for function, place in chain:
+            if function == wanted:
+                return f"{place} {function}"
+    return "?"
+
+
+def where_time_goes(lines: list[str], places: dict[int, list[tuple[str, str]]], top: int,
+                    source: Callable[[str], str] = lambda place: "") -> str:  # fmt: skip
+    """The trace's instructions and vector arithmetic by step (the line of trace_level(),
+    trace() or render_tile_packets() they were inlined from) and by innermost function, the
+    `top` largest of each; `source(place)` gives a step's source text."""
+    counts: dict[str, Counter[str]] = {"step": Counter(), "function": Counter()}
+    arith: dict[str, Counter[str]] = {"step": Counter(), "function": Counter()}
+    total = 0
+    for line in lines:
+        if "\t" not in line:
+            continue
+        offset, text = line.split("\t", 1)
+        chain = places.get(int(offset, 16), [])
+        vector = int(bool(VECTOR_ARITHMETIC.match(text.split()[0])))
+        for kind, key in (("step", step_of(chain)), ("function", chain[0][0] if chain else "?")):
+            counts[kind][key] += 1
+            arith[kind][key] += vector
+        total += 1
+    out = []
+    for kind in ("step", "function"):
+        out.append(f"  {'instructions':>12} {'vector arith':>12}  {kind}")
+        for key, n in counts[kind].most_common(top):
+            text = source(key) if kind == "step" else ""
+            out.append(f"  {n:7d} {100 * n / total:3.0f}% {arith[kind][key]:12d}  {key}"
+                       + (f"  {text}" if text else ""))  # fmt: skip
+    return "\n".join(out)
+
+
 def model(asm: str, cpu: str, iterations: int = 20) -> CoreModel:
     """The block timed by llvm-mca-19 on its model of `cpu` (repeated `iterations` times)."""
     done = subprocess.run(
@@ -303,6 +382,17 @@ def model(asm: str, cpu: str, iterations: int = 20) -> CoreModel:
     if done.returncode != 0:
         raise ModelError(f"llvm-mca-19 -mcpu={cpu} failed:\n{done.stderr[-2000:]}")
     return parse_mca(cpu, done.stdout)
+
+
+def step_source(key: str) -> str:
+    """The source text of a step `file:line function` of tracer/cpp, stripped."""
+    place = key.split(" ")[0]
+    name, _, line = place.rpartition(":")
+    path = Path(__file__).resolve().parent.parent / "tracer" / "cpp" / name
+    if not line.isdigit() or not path.is_file():
+        return ""
+    text = path.read_text().splitlines()
+    return text[int(line) - 1].strip() if 0 < int(line) <= len(text) else ""
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -326,6 +416,10 @@ def main(argv: list[str] | None = None) -> int:
         help="llvm-mca's -mcpu (default: znver4 and rocketlake, this machine class's two)",
     )  # fmt: skip
     parser.add_argument("--size", type=int, nargs=2, default=(1920, 1024), metavar=("W", "H"))
+    parser.add_argument(
+        "--where", type=int, default=0, metavar="N",
+        help="also list the N source functions and lines the most instructions came from",
+    )  # fmt: skip
     args = parser.parse_args(argv)
     try:
         import importlib.util
@@ -346,6 +440,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{so}: {n} packets of {core_module.rays_per_packet} rays from pixel "
               f"{tuple(args.pixel)}: {len(lines) / n:.0f} instructions a packet, "
               f"{arithmetic / n:.0f} of them vector add/sub/mul/div/sqrt")  # fmt: skip
+        if args.where > 0:
+            offsets = [int(line.split("\t", 1)[0], 16) for line in lines if "\t" in line]
+            print(where_time_goes(lines, source_places(so, offsets), args.where, step_source))
         for cpu in args.cpu or ["znver4", "rocketlake"]:
             m = model(trace_to_asm(lines), cpu)
             held = ", ".join(f"{r} {p:.0f}%" for r, p in

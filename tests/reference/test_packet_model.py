@@ -9,9 +9,12 @@ import pytest
 from reference.packet_model import (
     packet_index,
     packet_store,
+    parse_addr2line,
     parse_mca,
+    step_of,
     tile_side,
     trace_to_asm,
+    where_time_goes,
 )
 
 
@@ -129,3 +132,60 @@ def test_packet_store_is_store_pixels_conversion_of_the_widest_vectors() -> None
     assert packet_store(LISTING.replace("%zmm", "%ymm"), SOURCE.__getitem__) == 0x268D0
     # Without line tables (every source line unknown) there is none to stop at.
     assert packet_store(LISTING, lambda address: "") is None
+
+
+# addr2line -a -f -i -C on two instructions of a Clang 19 RelWithDebInfo core (argument lists
+# cut short): one in render_tile_packets() itself, one in sphere_t() inlined through
+# closest_hit(), trace_level() and trace().
+ADDR2LINE = """0x0000000000026f35
+rt::render_tile_packets(rt::PacketCulling const&, ...)
+/work/main/tracer/cpp/12_packet.h:142
+0x0000000000027733
+rt::sphere_t(rt::Sphere const&, rt::RayL const&, ...)
+/work/main/tracer/cpp/12_packet.h:146
+rt::closest_hit(rt::Scene const&, rt::RayL const&, ...)
+/work/main/tracer/cpp/12_packet.h:510 (discriminator 1)
+rt::trace_level(rt::Scene const&, rt::RayL&, ...)
+/work/main/tracer/cpp/12_packet.h:777
+rt::trace(rt::Scene const&, rt::RayL, ...)
+/work/main/tracer/cpp/12_packet.h:896
+rt::render_tile_packets(rt::PacketCulling const&, ...)
+/work/main/tracer/cpp/12_packet.h:1013
+"""
+
+
+def test_parse_addr2line_keeps_each_address_inlining_chain() -> None:
+    places = parse_addr2line(ADDR2LINE)
+    assert places[0x26F35] == [("render_tile_packets", "12_packet.h:142")]
+    chain = places[0x27733]
+    assert [f for f, _ in chain] == [
+        "sphere_t", "closest_hit", "trace_level", "trace", "render_tile_packets",
+    ]  # fmt: skip
+    assert chain[1] == ("closest_hit", "12_packet.h:510")  # the discriminator dropped
+    # The step: the line of trace_level() the instruction was inlined from, not the innermost
+    # function's; outside trace_level() and trace(), render_tile_packets()'s own line.
+    assert step_of(chain) == "12_packet.h:777 trace_level"
+    assert step_of(places[0x26F35]) == "12_packet.h:142 render_tile_packets"
+    assert step_of([]) == "?"
+
+
+def test_where_time_goes_counts_instructions_and_vector_arithmetic_per_step() -> None:
+    places = parse_addr2line(ADDR2LINE)
+    trace = [
+        "27733\tvmulpd %zmm1,%zmm2,%zmm3",
+        "27733\tvmulpd %zmm1,%zmm2,%zmm3",  # executed twice
+        "26f35\tvmovapd %zmm1,(%rsp)",
+        "#packet",
+        "99999\tnop",  # no line tables for it
+    ]
+    text = where_time_goes(
+        trace, places, top=5, source=lambda step: "HERE" if "777" in step else ""
+    )
+    lines = text.splitlines()
+    step_rows = lines[1 : lines.index(next(x for x in lines[1:] if "function" in x))]
+    assert step_rows[0].split() == ["2", "50%", "2", "12_packet.h:777", "trace_level", "HERE"]
+    assert ["1", "25%", "0", "12_packet.h:142", "render_tile_packets"] in [
+        r.split() for r in step_rows
+    ]
+    assert ["1", "25%", "0", "?"] in [r.split() for r in step_rows]
+    assert "sphere_t" in text.split("function")[1]  # the innermost function's table
