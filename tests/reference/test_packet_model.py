@@ -139,18 +139,18 @@ def test_packet_store_is_store_pixels_conversion_of_the_widest_vectors() -> None
 # closest_hit(), trace_level() and trace().
 ADDR2LINE = """0x0000000000026f35
 rt::render_tile_packets(rt::PacketCulling const&, ...)
-/work/main/tracer/cpp/12_packet.h:142
+/home/me/rtlab/tracer/cpp/12_packet.h:142
 0x0000000000027733
 rt::sphere_t(rt::Sphere const&, rt::RayL const&, ...)
-/work/main/tracer/cpp/12_packet.h:146
+/home/me/rtlab/tracer/cpp/12_packet.h:146
 rt::closest_hit(rt::Scene const&, rt::RayL const&, ...)
-/work/main/tracer/cpp/12_packet.h:510 (discriminator 1)
+/home/me/rtlab/tracer/cpp/12_packet.h:510 (discriminator 1)
 rt::trace_level(rt::Scene const&, rt::RayL&, ...)
-/work/main/tracer/cpp/12_packet.h:777
+/home/me/rtlab/tracer/cpp/12_packet.h:777
 rt::trace(rt::Scene const&, rt::RayL, ...)
-/work/main/tracer/cpp/12_packet.h:896
+/home/me/rtlab/tracer/cpp/12_packet.h:896
 rt::render_tile_packets(rt::PacketCulling const&, ...)
-/work/main/tracer/cpp/12_packet.h:1013
+/home/me/rtlab/tracer/cpp/12_packet.h:1013
 """
 
 
