@@ -334,3 +334,59 @@ def test_a_stale_refinement_pass_is_given_up_and_a_first_pass_never(tmp_path):
     with pytest.raises(Superseded):
         maker.make(scene, state, 2, 4, stale)
     assert maker.make(scene, state, 2, 5, lambda: False).header["spp"] == 8
+
+
+# ------------------------------------------------------------------ `rtlab view`, a process
+
+# `rtlab view` as the CLI runs it, but with one thing added: half a second after it starts
+# serving, the main thread drops an object whose __del__ receives SIGINT. The handler raises
+# Interrupted inside __del__, where Python prints "Exception ignored" and goes on: the way a real
+# Ctrl-C is lost when it lands in a closed connection's or a frame's finaliser.
+LOSES_THE_FIRST_INTERRUPT = """
+import asyncio, signal, sys, time
+import tracer.viewer.server as server
+
+class LosesTheInterrupt:
+    def __del__(self):
+        signal.raise_signal(signal.SIGINT)
+        deadline = time.monotonic() + 2
+        while time.monotonic() < deadline:  # bytecode runs: the handler raises in here
+            pass
+
+original = server.start
+
+async def start(*args, **kwargs):
+    got = await original(*args, **kwargs)
+    asyncio.get_running_loop().call_later(0.5, LosesTheInterrupt)  # made and dropped at once
+    return got
+
+server.start = start
+from tracer.cli import main
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+def test_a_ctrl_c_lost_in_a_finaliser_still_stops_the_viewer(tmp_path):
+    import subprocess
+    import sys
+
+    path, _ = _scene(tmp_path)
+    script = tmp_path / "view.py"
+    script.write_text(LOSES_THE_FIRST_INTERRUPT)
+    proc = subprocess.Popen(
+        [sys.executable, str(script), "view", str(path), "--port", "0", "--no-browser"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        out, err = proc.communicate(timeout=30)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        out, err = proc.communicate()
+        pytest.fail(f"the viewer did not stop after its lost Ctrl-C; stderr:\n{err[-3000:]}")
+    # The interrupt was lost as intended: raised inside __del__ and ignored there.
+    assert "Exception ignored" in err and "Interrupted" in err, err
+    assert "rtlab view: serving" in out
+    assert proc.returncode == 0, err  # Ctrl-C is how a viewer stops
+    assert "rtlab view: stopped" in err

@@ -8,6 +8,7 @@ import re
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -16,6 +17,13 @@ from tracer.scenes import demo_scene_path
 
 CHROMIUM = Path("/usr/bin/chromium")  # Debian's package, which the Makefile installs
 TIMEOUT_MS = 20_000  # a frame of 96x64 takes milliseconds; the margin is the shared machine's
+# `rtlab view` as `python -m tracer.cli` runs it, but printing every thread's stack on SIGUSR1:
+# a viewer that does not stop on Ctrl-C then says where it is (once, in a full `make test`, one
+# did not stop within 20 s, and nothing showed why).
+WITH_STACKS_ON_SIGUSR1 = (
+    "import faulthandler, signal, sys; faulthandler.register(signal.SIGUSR1, all_threads=True); "
+    "from tracer.cli import main; sys.exit(main(sys.argv[1:]))"
+)
 
 
 @pytest.fixture(scope="module")
@@ -32,8 +40,8 @@ def server(scene_file):
     proc = subprocess.Popen(
         [
             sys.executable,
-            "-m",
-            "tracer.cli",
+            "-c",
+            WITH_STACKS_ON_SIGUSR1,
             "view",
             str(scene_file),
             "--port",
@@ -52,7 +60,15 @@ def server(scene_file):
     assert match, f"no URL in {line!r}; stderr: {proc.stderr.read() if proc.poll() else ''}"
     yield match.group(0)
     proc.send_signal(signal.SIGINT)  # Ctrl-C: how a viewer stops, exit status 0
-    assert proc.wait(20) == 0, proc.stderr.read()
+    try:
+        code = proc.wait(20)
+    except subprocess.TimeoutExpired:
+        proc.send_signal(signal.SIGUSR1)  # every thread's stack to stderr (faulthandler)
+        time.sleep(1)
+        proc.kill()
+        err = proc.communicate()[1]
+        pytest.fail(f"rtlab view did not stop within 20 s of SIGINT; its stderr:\n{err[-8000:]}")
+    assert code == 0, proc.stderr.read()
 
 
 @pytest.fixture(scope="module")

@@ -36,6 +36,7 @@ from typing import Any
 import tornado.web
 import tornado.websocket
 
+from tracer import interrupt
 from tracer.render import ImageTooLargeError
 from tracer.scene import Mesh, Scene, SceneError, load_scene
 from tracer.viewer.session import (
@@ -489,7 +490,14 @@ def serve(
             import webbrowser
 
             webbrowser.open(url)
-        await asyncio.Event().wait()
+        # Ctrl-C raises Interrupted wherever the main thread is (tracer/interrupt.py). Where that
+        # is a __del__ or a weakref finaliser (a closed connection's, a frame's), Python prints
+        # "Exception ignored" and serves on, and the handler ignores a second Ctrl-C while the
+        # first unwinds: the viewer would never stop. So the loop also asks, every POLL_SECONDS,
+        # whether a signal came, and raises it again here, where it reaches cmd_view().
+        while True:
+            await asyncio.sleep(POLL_SECONDS)
+            interrupt.raise_if_interrupted()
 
     try:
         asyncio.run(main())
