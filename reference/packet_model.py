@@ -418,7 +418,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--size", type=int, nargs=2, default=(1920, 1024), metavar=("W", "H"))
     parser.add_argument(
         "--where", type=int, default=0, metavar="N",
-        help="also list the N source functions and lines the most instructions came from",
+        help="also list the N steps (lines of trace_level(), trace() or render_tile_packets()) "
+        "and the N innermost functions the most instructions came from",
     )  # fmt: skip
     args = parser.parse_args(argv)
     try:
