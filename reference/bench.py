@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from tracer import interrupt
 from tracer.image import atomic_path
 from tracer.render import default_threads, render_with_stats
 from tracer.scene import load_scene
@@ -89,6 +90,9 @@ def _best_alternating(runs: dict[str, tuple[Callable[[], float], int]]) -> dict[
     for round_ in range(max(repeats for _, repeats in runs.values())):
         for name, (fn, repeats) in runs.items():
             if round_ < repeats:
+                # A Ctrl-C lost in a finaliser (a POV-Ray run's temporary directory's:
+                # tracer/interrupt.py) stops the bench here, not minutes later at its end.
+                interrupt.raise_if_interrupted()
                 times[name].append(fn())
     return {name: min(t) for name, t in times.items()}
 

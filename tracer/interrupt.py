@@ -4,7 +4,9 @@ The handler raises Interrupted once, wherever the main thread is. Where that is 
 ``__del__`` or a weakref finaliser (a subprocess or a temporary directory being collected),
 Python prints "Exception ignored" and goes on: the interrupt would be lost, and a batch would
 run to its end and exit 0. So the signal is also remembered: a batch checks it between tasks
-(``raise_if_interrupted()``, tracer/batch.py) and main() checks it at the end."""
+(``raise_if_interrupted()``, tracer/batch.py), ``rtlab bench`` before each timed run
+(reference/bench.py), ``rtlab view`` four times a second (tracer/viewer/server.py), and main()
+checks it at the end."""
 
 from __future__ import annotations
 
