@@ -35,6 +35,7 @@ from lessons.mistakes import Mistake, mistakes, write_mistake
 from lessons.probe import HIDDEN
 from lessons.scene_checks import SceneCheck, lesson_scenes, share_bound
 from reports.plots import Plot, lesson_plots
+from tracer import interrupt
 
 ROOT = Path(__file__).resolve().parent.parent
 # Built extensions of the known-wrong versions, keyed by the digest of what goes into the
@@ -250,6 +251,9 @@ def scene_page(check: SceneCheck) -> ScenePage:
     from reference.metrics import FLOAT32_SLACK, MITSUBA_TOLERANCE
     from tracer.render import render_with_stats
 
+    # Each scene renders rtlab and times its references: seconds. A Ctrl-C lost in a finaliser
+    # (a reference run's temporary directory: tracer/interrupt.py) stops the report here.
+    interrupt.raise_if_interrupted()
     if isinstance(check, PathSceneCheck):
         return path_scene_page(check)
     scene = check.load()

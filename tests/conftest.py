@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import sys
 import tempfile
 
 import pytest
@@ -65,3 +66,32 @@ def tmp_scene(tmp_path):
         return path
 
     return write
+
+
+@pytest.fixture
+def lost_interrupt():
+    """A SIGINT received and lost, as a real Ctrl-C is when it lands in a finaliser: the CLI's
+    handler (tracer/interrupt.py, installed here) raised Interrupted inside a __del__, where
+    Python passes it to sys.unraisablehook and goes on. Checked to have happened; the handlers
+    are put back afterwards."""
+    import signal
+
+    from tracer import interrupt
+
+    class LosesTheInterrupt:
+        def __del__(self):
+            signal.raise_signal(signal.SIGINT)  # the handler raises Interrupted in here
+
+    previous = interrupt.install()
+    lost: list[type[BaseException] | None] = []
+    hook = sys.unraisablehook
+    sys.unraisablehook = lambda unraisable: lost.append(unraisable.exc_type)
+    try:
+        LosesTheInterrupt()  # made and dropped: its __del__ runs at once
+    finally:
+        sys.unraisablehook = hook
+    try:
+        assert lost == [interrupt.Interrupted], lost  # raised, and lost in the finaliser
+        yield
+    finally:
+        interrupt.restore(previous)

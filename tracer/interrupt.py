@@ -5,8 +5,8 @@ The handler raises Interrupted once, wherever the main thread is. Where that is 
 Python prints "Exception ignored" and goes on: the interrupt would be lost, and a batch would
 run to its end and exit 0. So the signal is also remembered: a batch checks it between tasks
 (``raise_if_interrupted()``, tracer/batch.py), ``rtlab bench`` before each timed run
-(reference/bench.py), ``rtlab view`` four times a second (tracer/viewer/server.py), and main()
-checks it at the end."""
+(reference/bench.py), ``rtlab report`` before each scene (reports/lesson.py), ``rtlab view``
+four times a second (tracer/viewer/server.py), and main() checks it at the end."""
 
 from __future__ import annotations
 

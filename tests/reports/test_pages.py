@@ -328,3 +328,14 @@ def test_stereo_and_path_scenes_are_judged_as_the_grader_judges_them(special, br
         said = page.eval_on_selector_all(".grader strong", "els => els.map(e => e.textContent)")
         assert said == ["it passes"] * len(pages[lesson].scenes)
         assert "<p>" not in page.inner_text("main")  # the verdict lines' Markdown rendered
+
+
+def test_a_ctrl_c_lost_in_a_finaliser_stops_the_report_before_its_next_scene(lost_interrupt):
+    """A Ctrl-C lost on the way (tests/conftest.py) stops `rtlab report` before the next scene
+    renders, not at the end of the course."""
+    from reports.lesson import scene_page
+    from tracer import interrupt
+
+    check = lesson_scenes("L04")[0]
+    with pytest.raises(interrupt.Interrupted):
+        scene_page(check)
