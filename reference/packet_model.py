@@ -27,6 +27,7 @@ core_with_symbols() builds one (Clang 19, as ``make``) in build/packet-model.
 from __future__ import annotations
 
 import argparse
+import functools
 import os
 import re
 import shutil
@@ -211,17 +212,12 @@ def store_offsets(so: Path) -> tuple[int, int]:
          f"--stop-address={fn + size:#x}", str(so)],
         capture_output=True, text=True, check=True,
     )  # fmt: skip
-    sources: dict[str, list[str]] = {}
+    conversions = re.findall(r"^\s*([0-9a-f]+):\s+vcvtpd2ps", listing.stdout, re.M)
+    places = source_places(so, [int(a, 16) for a in conversions])
 
     def source_line(address: int) -> str:
-        where = subprocess.run(
-            [_tool("addr2line"), "-e", str(so), f"{address:#x}"], capture_output=True, text=True
-        ).stdout.strip()
-        path, _, line = where.rpartition(":")
-        if path not in sources:
-            sources[path] = Path(path).read_text().splitlines() if Path(path).is_file() else []
-        number = int(line.split()[0]) if line.split() and line.split()[0].isdigit() else 0
-        return sources[path][number - 1] if 0 < number <= len(sources[path]) else ""
+        chain = places.get(address)
+        return source_text(chain[0][1]) if chain else ""
 
     store = packet_store(listing.stdout, source_line)
     if store is None:
@@ -310,7 +306,8 @@ def parse_addr2line(text: str) -> dict[int, list[tuple[str, str]]]:
     """addr2line -a -f -i output read back: after each address line (0x...), pairs of a function
     and a path:line, innermost first (the first pair's line is the instruction's own, each
     further pair's the line in that function that the pair before was inlined at). Functions
-    lose their arguments and the rt:: prefix, paths their folders."""
+    lose their arguments and the rt:: prefix, lines their discriminators; paths stay whole, so
+    that a core built from another tree (--so) is read against that tree's sources."""
     places: dict[int, list[tuple[str, str]]] = {}
     chain: list[tuple[str, str]] = []
     lines = text.splitlines()
@@ -324,7 +321,7 @@ def parse_addr2line(text: str) -> dict[int, list[tuple[str, str]]]:
         path, _, line = (
             (lines[k + 1] if k + 1 < len(lines) else "??:0").partition(" ")[0].rpartition(":")
         )
-        chain.append((function, f"{Path(path).name}:{line}"))
+        chain.append((function, f"{path}:{line}"))
         k += 2
     return places
 
@@ -367,7 +364,8 @@ def where_time_goes(lines: list[str], places: dict[int, list[tuple[str, str]]], 
         out.append(f"  {'instructions':>12} {'vector arith':>12}  {kind}")
         for key, n in counts[kind].most_common(top):
             text = source(key) if kind == "step" else ""
-            out.append(f"  {n:7d} {100 * n / total:3.0f}% {arith[kind][key]:12d}  {key}"
+            shown = Path(key).name if kind == "step" else key  # the step's file, not its folders
+            out.append(f"  {n:7d} {100 * n / total:3.0f}% {arith[kind][key]:12d}  {shown}"
                        + (f"  {text}" if text else ""))  # fmt: skip
     return "\n".join(out)
 
@@ -384,15 +382,17 @@ def model(asm: str, cpu: str, iterations: int = 20) -> CoreModel:
     return parse_mca(cpu, done.stdout)
 
 
-def step_source(key: str) -> str:
-    """The source text of a step `file:line function` of tracer/cpp, stripped."""
-    place = key.split(" ")[0]
-    name, _, line = place.rpartition(":")
-    path = Path(__file__).resolve().parent.parent / "tracer" / "cpp" / name
-    if not line.isdigit() or not path.is_file():
-        return ""
-    text = path.read_text().splitlines()
-    return text[int(line) - 1].strip() if 0 < int(line) <= len(text) else ""
+@functools.cache
+def _source_file(path: str) -> list[str]:
+    return Path(path).read_text().splitlines() if Path(path).is_file() else []
+
+
+def source_text(place: str) -> str:
+    """The source line at `place` (``path:line``, anything after a space ignored: a step's
+    function), stripped; empty where the file or the line is unknown."""
+    path, _, line = place.split(" ")[0].rpartition(":")
+    text = _source_file(path)
+    return text[int(line) - 1].strip() if line.isdigit() and 0 < int(line) <= len(text) else ""
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -443,7 +443,7 @@ def main(argv: list[str] | None = None) -> int:
               f"{arithmetic / n:.0f} of them vector add/sub/mul/div/sqrt")  # fmt: skip
         if args.where > 0:
             offsets = [int(line.split("\t", 1)[0], 16) for line in lines if "\t" in line]
-            print(where_time_goes(lines, source_places(so, offsets), args.where, step_source))
+            print(where_time_goes(lines, source_places(so, offsets), args.where, source_text))
         for cpu in args.cpu or ["znver4", "rocketlake"]:
             m = model(trace_to_asm(lines), cpu)
             held = ", ".join(f"{r} {p:.0f}%" for r, p in

@@ -11,6 +11,7 @@ from reference.packet_model import (
     packet_store,
     parse_addr2line,
     parse_mca,
+    source_text,
     step_of,
     tile_side,
     trace_to_asm,
@@ -156,16 +157,17 @@ rt::render_tile_packets(rt::PacketCulling const&, ...)
 
 def test_parse_addr2line_keeps_each_address_inlining_chain() -> None:
     places = parse_addr2line(ADDR2LINE)
-    assert places[0x26F35] == [("render_tile_packets", "12_packet.h:142")]
+    here = "/home/me/rtlab/tracer/cpp/12_packet.h"
+    assert places[0x26F35] == [("render_tile_packets", f"{here}:142")]
     chain = places[0x27733]
     assert [f for f, _ in chain] == [
         "sphere_t", "closest_hit", "trace_level", "trace", "render_tile_packets",
     ]  # fmt: skip
-    assert chain[1] == ("closest_hit", "12_packet.h:510")  # the discriminator dropped
+    assert chain[1] == ("closest_hit", f"{here}:510")  # the discriminator dropped
     # The step: the line of trace_level() the instruction was inlined from, not the innermost
     # function's; outside trace_level() and trace(), render_tile_packets()'s own line.
-    assert step_of(chain) == "12_packet.h:777 trace_level"
-    assert step_of(places[0x26F35]) == "12_packet.h:142 render_tile_packets"
+    assert step_of(chain) == f"{here}:777 trace_level"
+    assert step_of(places[0x26F35]) == f"{here}:142 render_tile_packets"
     assert step_of([]) == "?"
 
 
@@ -189,3 +191,12 @@ def test_where_time_goes_counts_instructions_and_vector_arithmetic_per_step() ->
     ]
     assert ["1", "25%", "0", "?"] in [r.split() for r in step_rows]
     assert "sphere_t" in text.split("function")[1]  # the innermost function's table
+
+
+def test_source_text_reads_the_line_at_a_place(tmp_path) -> None:
+    header = tmp_path / "a.h"
+    header.write_text("one\n    two;  \n")
+    assert source_text(f"{header}:2 trace_level") == "two;"  # a step's function ignored
+    assert source_text(f"{header}:1") == "one"
+    assert source_text(f"{header}:3") == "" and source_text(f"{header}:?") == ""
+    assert source_text(f"{tmp_path / 'missing.h'}:1") == ""
