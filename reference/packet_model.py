@@ -39,6 +39,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from reference.core_build import ROOT, BuildError, build_core
+
 #: render_tile_packets()'s symbol: the tile loop into which trace() and trace_level() are inlined.
 TILE_SYMBOL = "_ZN2rt19render_tile_packetsERKNS_13PacketCullingERKNS_5SceneEiiiiPfRNS_9RayCountsE"
 
@@ -233,25 +235,11 @@ def core_with_symbols() -> Path:
     its symbols and line tables (RelWithDebInfo; the compile options the CMakeLists gives,
     -O3 among them, come after the build type's), in build/packet-model: the installed core,
     like nanobind's every release build, has its symbols stripped."""
-    repo = Path(__file__).resolve().parent.parent
-    build, bin_dir = repo / "build" / "packet-model", Path(sys.executable).parent
-    cmake_dir = subprocess.run(
-        [sys.executable, "-m", "nanobind", "--cmake_dir"], capture_output=True, text=True
-    ).stdout.strip()
-    for command in (
-        [str(bin_dir / "cmake"), "-S", str(repo), "-B", str(build), "-G", "Ninja",
-         f"-DCMAKE_MAKE_PROGRAM={bin_dir / 'ninja'}", "-DCMAKE_BUILD_TYPE=RelWithDebInfo",
-         f"-DCMAKE_CXX_COMPILER={_tool('clang++-19')}", f"-Dnanobind_DIR={cmake_dir}",
-         f"-DPython_EXECUTABLE={sys.executable}"],
-        [str(bin_dir / "cmake"), "--build", str(build)],
-    ):  # fmt: skip
-        done = subprocess.run(command, capture_output=True, text=True)
-        if done.returncode != 0:
-            raise ModelError(f"{' '.join(command[:2])} failed:\n{done.stdout[-2000:]}{done.stderr}")
-    built = sorted(build.glob("_core*.so"))
-    if not built:
-        raise ModelError(f"the build in {build} made no _core*.so")
-    return built[0]
+    compiler = f"-DCMAKE_CXX_COMPILER={_tool('clang++-19')}"
+    try:
+        return build_core(ROOT / "build" / "packet-model", compiler, build_type="RelWithDebInfo").so
+    except BuildError as error:
+        raise ModelError(str(error)) from error
 
 
 def trace_packets(so: Path, x: int, y: int, packets: int, width: int, height: int,
@@ -261,7 +249,6 @@ def trace_packets(so: Path, x: int, y: int, packets: int, width: int, height: in
     first = packet_index(x, y, width, height, rays_per_packet)
     if first == 0:
         raise ModelError("the first packet has no store before it to stop at: pick another pixel")
-    repo = Path(__file__).resolve().parent.parent
     with tempfile.TemporaryDirectory() as tmp:
         script, out, loop = Path(tmp, "trace.py"), Path(tmp, "trace.txt"), Path(tmp, "loop.py")
         script.write_text(GDB_SCRIPT)
@@ -269,11 +256,11 @@ def trace_packets(so: Path, x: int, y: int, packets: int, width: int, height: in
         env = {**os.environ, "PM_SYMBOL": TILE_SYMBOL, "PM_STORE": f"{store:x}",
                "PM_FN": f"{fn:x}", "PM_PACKETS": str(packets),
                "PM_IGNORE": str(first - 1), "PM_OUT": str(out),
-               "PYTHONPATH": str(repo), "OPENBLAS_NUM_THREADS": "1"}  # fmt: skip
+               "PYTHONPATH": str(ROOT), "OPENBLAS_NUM_THREADS": "1"}  # fmt: skip
         done = subprocess.run(
             [_tool("gdb"), "-q", "-batch", "-x", str(script), "--args", sys.executable,
              str(loop), str(so), str(width), str(height)],
-            env=env, cwd=repo, capture_output=True, text=True, timeout=1800,
+            env=env, cwd=ROOT, capture_output=True, text=True, timeout=1800,
         )  # fmt: skip
         if not out.exists():
             raise ModelError(f"gdb wrote no trace:\n{done.stdout[-2000:]}\n{done.stderr[-2000:]}")

@@ -7,53 +7,27 @@ compiler, c++)."""
 
 from __future__ import annotations
 
-import glob
 import os
 import subprocess
 import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-VENV_BIN = Path(sys.executable).parent
+from reference.core_build import ROOT, BuildError
+from reference.core_build import build_core as _build
+
+__all__ = ["ROOT", "build_core", "run_tests_with"]
 
 
 def build_core(build: Path, *options: str) -> Path:
     """Configure and build the core into `build` with extra CMake `options` (-D...); the
-    extension's path. Fails with the build's own output on an error or a warning of ours."""
-    nanobind = subprocess.run(
-        [sys.executable, "-m", "nanobind", "--cmake_dir"],
-        capture_output=True,
-        text=True,
-        check=True,
-    ).stdout.strip()
-    configure = [
-        str(VENV_BIN / "cmake"),
-        "-S",
-        str(ROOT),
-        "-B",
-        str(build),
-        "-G",
-        "Ninja",
-        f"-DCMAKE_MAKE_PROGRAM={VENV_BIN / 'ninja'}",
-        "-DCMAKE_BUILD_TYPE=Release",
-        f"-DPython_EXECUTABLE={sys.executable}",
-        f"-Dnanobind_DIR={nanobind}",
-        *options,
-    ]
-    configured = subprocess.run(configure, capture_output=True, text=True)
-    assert configured.returncode == 0, configured.stdout[-4000:] + configured.stderr[-4000:]
-    built = subprocess.run(
-        [str(VENV_BIN / "cmake"), "--build", str(build)], capture_output=True, text=True
-    )
-    assert built.returncode == 0, built.stdout[-4000:] + built.stderr[-4000:]
-    # The core builds without a warning of -Wall -Wextra; so it must in every build (nanobind's
-    # own sources are not ours, and ninja names each file it compiles).
-    ours = [
-        line for line in built.stdout.splitlines() if "warning:" in line and "nanobind" not in line
-    ]
-    assert not ours, "\n".join(ours)
-    (so,) = glob.glob(str(build / "_core.*.so"))
-    return Path(so)
+    extension's path. Fails with the build's own output on an error or a warning of ours: the
+    core builds without a warning of -Wall -Wextra, so it must in every build."""
+    try:
+        made = _build(build, *options)
+    except BuildError as error:
+        raise AssertionError(str(error)) from error
+    assert not made.warnings, "\n".join(made.warnings)
+    return made.so
 
 
 def run_tests_with(so: Path, expected: str, *tests: str) -> None:

@@ -1,0 +1,67 @@
+"""The C++ core built outside `make`: by CMake and ninja from the .venv into a folder of build/
+(ninja rebuilds only what changed since the last run there), with a chosen compiler, CMake
+options and source tree. One builder for every such build: tests/core_builds.py's second
+compiler and instruction sets, reference/packet_model.py's core with symbols, and
+reference/build_ab.py's variants timed against each other.
+
+A CMake cache made for one compiler cannot be reused for another, so each compiler needs its
+own folder; the callers name them so."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+VENV_BIN = Path(sys.executable).parent
+
+
+class BuildError(RuntimeError):
+    """The core did not configure or build; the message carries the tools' own output."""
+
+
+@dataclass(frozen=True)
+class CoreBuild:
+    so: Path  # the extension module, _core.<tag>.so
+    warnings: tuple[str, ...]  # the compiler's warnings about rtlab's own sources
+
+
+def build_core(
+    build: Path, *options: str, source: Path = ROOT, build_type: str = "Release"
+) -> CoreBuild:
+    """Configure `source` (a tree with rtlab's CMakeLists.txt) into `build` with extra CMake
+    `options` (-D...) and build the core. Release is what `make` builds (scikit-build-core's
+    default); the CMakeLists' own -O3 comes after any build type's flags, so RelWithDebInfo
+    gives the same code with symbols and line tables. Raises BuildError with the output of the
+    step that failed. The warnings returned are those of the core's sources: nanobind's own
+    are not ours, and ninja names each file it compiles."""
+    nanobind = subprocess.run(
+        [sys.executable, "-m", "nanobind", "--cmake_dir"], capture_output=True, text=True
+    )
+    if nanobind.returncode != 0:
+        raise BuildError(f"nanobind is not installed in {sys.prefix}:\n{nanobind.stderr[-2000:]}")
+    configure = [
+        str(VENV_BIN / "cmake"), "-S", str(source), "-B", str(build), "-G", "Ninja",
+        f"-DCMAKE_MAKE_PROGRAM={VENV_BIN / 'ninja'}", f"-DCMAKE_BUILD_TYPE={build_type}",
+        f"-DPython_EXECUTABLE={sys.executable}", f"-Dnanobind_DIR={nanobind.stdout.strip()}",
+        *options,
+    ]  # fmt: skip
+    compile_ = [str(VENV_BIN / "cmake"), "--build", str(build)]
+    output = ""
+    for step, command in (("configure", configure), ("build", compile_)):
+        done = subprocess.run(command, capture_output=True, text=True)
+        if done.returncode != 0:
+            raise BuildError(
+                f"cmake could not {step} the core in {build}:\n"
+                f"{done.stdout[-4000:]}{done.stderr[-4000:]}"
+            )
+        output = done.stdout
+    built = sorted(build.glob("_core.*.so"))
+    if len(built) != 1:
+        raise BuildError(f"the build in {build} made {len(built)} _core.*.so files, not one")
+    warnings = tuple(
+        line for line in output.splitlines() if "warning:" in line and "nanobind" not in line
+    )
+    return CoreBuild(built[0], warnings)
