@@ -253,6 +253,19 @@ def agreement(triangles: np.ndarray, others: np.ndarray) -> float:
     return float(np.mean(same)) if len(same) else 1.0
 
 
+def bunny_alone(width: int = 1920, height: int = 1024) -> Any:
+    """The Stanford bunny's scene with the bunny alone (what Embree is given too), rendered by
+    the aov integrator: the geometry suite's primary rays."""
+    import dataclasses
+
+    from tracer.scene import Mesh
+
+    scene = load_scene(Path(__file__).resolve().parent / "scenes" / "bunny.toml")
+    scene = scene.with_overrides(width=width, height=height, integrator="aov")
+    meshes = tuple(o for o in scene.objects if isinstance(o, Mesh))
+    return dataclasses.replace(scene, objects=meshes)
+
+
 def suite_geometry(
     repeats: int = 3,
     threads: tuple[int, ...] = (1, 2),
@@ -269,7 +282,6 @@ def suite_geometry(
     ``agreement``, the fraction of its rays on which Embree found the closest triangle rtlab
     finds for them, or none where rtlab finds none;
     plus each one's hierarchy build time."""
-    import dataclasses
     import threading
     import time
 
@@ -280,14 +292,9 @@ def suite_geometry(
     from tracer.render import to_core
     from tracer.scene import Mesh
 
-    root = Path(__file__).resolve().parent
-    scene = load_scene(root / "scenes" / "bunny.toml").with_overrides(
-        width=width, height=height, integrator="aov"
-    )
-    # The bunny alone: what Embree is given too.
-    meshes = tuple(o for o in scene.objects if isinstance(o, Mesh))
-    bunny_only = dataclasses.replace(scene, objects=meshes)
-    mesh = meshes[0]
+    bunny_only = bunny_alone(width, height)
+    mesh = bunny_only.objects[0]
+    assert isinstance(mesh, Mesh)
     rows: list[dict[str, Any]] = []
 
     def build_rtlab() -> float:

@@ -1,0 +1,161 @@
+"""reference/build_ab.py: builds of the core timed against each other. The variants' specs, the
+rounds' order, the summary's arithmetic and the check that every variant did the same work;
+and end to end, a real second build of the core timed against the installed one."""
+
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from reference.build_ab import (
+    ABError,
+    Cell,
+    Variant,
+    different_outputs,
+    installed_core,
+    order_of,
+    parse_variant,
+    summarize,
+    workers,
+)
+from reference.core_build import ROOT
+
+
+def test_a_spec_is_a_name_then_keys_with_shell_quoting() -> None:
+    assert parse_variant("base") == Variant("base")
+    assert parse_variant('c22 cxx=clang++-22 flags="-mtune=znver4 -DX=1" rev=HEAD~1') == Variant(
+        "c22", cxx="clang++-22", flags="-mtune=znver4 -DX=1", rev="HEAD~1"
+    )
+    assert parse_variant("installed").installed
+    assert not parse_variant("mine").installed
+
+
+@pytest.mark.parametrize(
+    ("spec", "message"),
+    [
+        ("b flag=-O2", "unknown key 'flag' (did you mean 'flags'?)"),
+        ("b cxx", "'cxx' is not key=value"),
+        ("cxx=g++", "expected a name first"),
+        ("a/b", "a name of letters, digits"),
+        ("b cxx=g++ cxx=clang++", "cxx given twice"),
+        ("installed cxx=g++", "installed is make's build; it takes no keys"),
+        ('b flags="-O2', "No closing quotation"),
+    ],
+)
+def test_a_bad_spec_says_what_is_wrong(spec: str, message: str) -> None:
+    with pytest.raises(ABError, match=re.escape(message)):
+        parse_variant(spec)
+
+
+def test_the_turns_reverse_every_other_round() -> None:
+    names = ["a", "b", "c"]
+    assert [order_of(r, names) for r in range(3)] == [names, names[::-1], names]
+
+
+def test_each_round_is_a_ratio_within_that_round() -> None:
+    # Round by round: b is 2x, then 1.25x, then 1x as fast as a; the machine's speed drifts
+    # 2x between rounds, which the ratios do not see and the medians of times do.
+    cell = Cell("ex25", 1, {"a": [0.2, 0.1, 0.1], "b": [0.1, 0.08, 0.1]}, {})
+    a, b = summarize([cell], ["a", "b"])
+    assert (a["variant"], a["speed_vs_first"], a["speed_min"], a["speed_max"]) == ("a", 1, 1, 1)
+    assert b["speed_vs_first"] == pytest.approx(1.25)
+    assert (b["speed_min"], b["speed_max"]) == pytest.approx((1.0, 2.0))
+    assert a["seconds"] == 0.1 and b["seconds"] == 0.1  # medians of the times
+    assert b["rounds"] == [0.1, 0.08, 0.1]
+
+
+def test_outputs_must_be_the_same_bits_in_every_variant() -> None:
+    same = Cell("ex25", 1, {}, {"a": {"d1"}, "b": {"d1"}})
+    assert different_outputs([same], "a") == []
+    other = Cell("ex25", 2, {}, {"a": {"d1"}, "b": {"d2"}})
+    assert different_outputs([same, other], "a") == ["ex25, 2 thread(s): b differs from a"]
+    varies = Cell("cornell-64", 1, {}, {"a": {"d1", "d3"}, "b": {"unsteady"}})
+    assert different_outputs([varies], "a") == [
+        "cornell-64, 1 thread(s): a's output varies",
+        "cornell-64, 1 thread(s): b's output varies",
+    ]
+
+
+def _run(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "reference.build_ab", *args],
+        capture_output=True, text=True, cwd=ROOT, timeout=600,
+    )  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--variant", "installed"], "expected two or more, each its own name"),
+        (
+            ["--variant", "a", "--variant", "b rev=no-such-commit"],
+            "rev=no-such-commit: not a commit",
+        ),
+        (["--variant", "a", "--variant", "a"], "expected two or more, each its own name"),
+        (
+            ["--variant", "installed", "--variant", "b", "--cases", "ex52"],
+            "unknown case 'ex52' (did you mean 'ex25'?)",
+        ),
+        (["--variant", "installed", "--variant", "b", "--rounds", "0"], "--rounds: expected"),
+        (
+            ["--variant", "installed", "--variant", "b cxx=no-such-c++"],
+            "compiler no-such-c++ is not on PATH",
+        ),
+        (
+            ["--variant", "installed", "--variant", "b rev=no-such-commit"],
+            "rev=no-such-commit: not a commit",
+        ),
+    ],
+)
+def test_usage_errors_stop_before_any_build(args: list[str], message: str) -> None:
+    done = _run(*args)
+    assert done.returncode == 2, done.stdout + done.stderr
+    assert message in done.stderr
+    assert "Traceback" not in done.stderr
+
+
+def test_a_failing_case_names_its_variant() -> None:
+    # A real worker with the installed core, asked for a case it does not have.
+    so = installed_core()
+    with workers([(Variant("mine"), so)]) as (worker,):
+        assert worker.compiler  # the core's own name for its compiler
+        with pytest.raises(ABError, match="variant mine: ABError: unknown case 'ex52'"):
+            worker.ask({"case": "ex52", "threads": 1, "repeats": 1, "size": None})
+        # The worker survives a failed request and answers the next one.
+        answer = worker.ask({"case": "ex25", "threads": 1, "repeats": 2, "size": [64, 32]})
+        assert answer["seconds"] > 0 and len(answer["digest"]) == 16
+
+
+def test_a_second_build_timed_against_the_installed_core(tmp_path: Path) -> None:
+    """A real build of this checkout tuned for no particular processor, against make's build:
+    both render Ex 25 and trace the bunny's rays to the same bits (tuning changes the schedule,
+    not one IEEE operation: the build forbids contraction into fused multiply-adds), so the
+    tool times them and its rows agree with its own round times."""
+    out = tmp_path / "ab.json"
+    done = _run(
+        "--variant", "installed", "--variant", "generic flags=-mtune=generic",
+        "--cases", "ex25", "--threads", "1", "2", "--size", "96", "64",
+        "--rounds", "2", "--repeats", "1", "--json", str(out),
+    )  # fmt: skip
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
+    assert "output differs" not in done.stdout
+    assert "generic: " in done.stdout and "-mtune=generic, this checkout" in done.stdout
+    rows = json.loads(out.read_text())
+    assert [(r["case"], r["threads"], r["variant"]) for r in rows] == [
+        ("ex25", 1, "installed"),
+        ("ex25", 1, "generic"),
+        ("ex25", 2, "installed"),
+        ("ex25", 2, "generic"),
+    ]
+    for base, other in (rows[0:2], rows[2:4]):
+        assert base["speed_vs_first"] == 1.0
+        ratios = sorted(b / t for b, t in zip(base["rounds"], other["rounds"], strict=True))
+        assert other["speed_min"] == pytest.approx(ratios[0])
+        assert other["speed_max"] == pytest.approx(ratios[-1])
+        assert other["flags"] == "-mtune=generic" and other["compiler"].startswith("Debian Clang")
+    assert (ROOT / "build" / "ab" / "generic" / "build").is_dir()
