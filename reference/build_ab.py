@@ -26,6 +26,9 @@ A SPEC is a name, then ``key=value`` words (shell quoting, so flags may hold spa
     NAME flags="-mtune=znver4"     CMAKE_CXX_FLAGS (before the CMakeLists' own options,
                                    so an -O level there is overridden by its -O3)
     NAME rev=HEAD~1                a commit's files (git archive) instead of the checkout's
+    NAME cmake="-DRTLAB_MARCH=rocketlake"
+                                   more CMake options (the core's instruction set:
+                                   CMakeLists.txt's RTLAB_MARCH)
 
 The cases are `rtlab bench`'s rtlab sides (reference/bench.py), at its sizes: ex25 (1920x1024, 1
 spp), bunny-primary (the aov integrator's camera rays), bunny-diffuse (2M incoherent rays, the
@@ -61,7 +64,7 @@ from reference.core_build import ROOT, BuildError, build_core
 #: Make's compiler for the core (the Makefile's CORE_CXX).
 DEFAULT_CXX = "clang++-19"
 CASES = ("ex25", "bunny-primary", "bunny-diffuse", "cornell-64", "cornell-128")
-_KEYS = ("cxx", "flags", "rev")
+_KEYS = ("cxx", "flags", "rev", "cmake")
 #: The installed core, `make`'s build: a variant of this name is not built here.
 INSTALLED = "installed"
 
@@ -77,6 +80,7 @@ class Variant:
     cxx: str = DEFAULT_CXX
     flags: str = ""
     rev: str | None = None  # a git revision; None: this checkout's files
+    cmake: str = ""  # more CMake options, shell-quoted
 
     @property
     def installed(self) -> bool:
@@ -85,7 +89,7 @@ class Variant:
     def describe(self) -> str:
         if self.installed:
             return "the core make built (.venv)"
-        words = [self.cxx] + ([self.flags] if self.flags else [])
+        words = [self.cxx] + [w for w in (self.flags, self.cmake) if w]
         return " ".join(words) + (f", commit {self.rev}" if self.rev else ", this checkout")
 
 
@@ -184,17 +188,24 @@ def installed_core() -> Path:
 
 
 def build_variant(variant: Variant, log: Callable[[str], None] = print) -> Path:
-    """The variant's core, built into build/ab/NAME (the installed one as it is)."""
+    """The variant's core, built into build/ab/NAME (the installed one as it is). A folder
+    last configured otherwise (another compiler, flags or options under the same name) is
+    emptied first: CMake's cache would keep an option the new spec no longer gives."""
     if variant.installed:
         return installed_core()
     compiler = _compiler(variant)
     folder = ROOT / "build" / "ab" / variant.name
     options = [f"-DCMAKE_CXX_COMPILER={compiler}", f"-DCMAKE_CXX_FLAGS={variant.flags}"]
+    options += shlex.split(variant.cmake)
+    configured = folder / "build" / "rtlab-options.json"
+    if configured.exists() and json.loads(configured.read_text()) != options:
+        shutil.rmtree(folder / "build")
     start = time.perf_counter()
     try:
         made = build_core(folder / "build", *options, source=_source(variant, folder))
     except BuildError as error:
         raise ABError(f"variant {variant.name} ({variant.describe()}): {error}") from error
+    configured.write_text(json.dumps(options))
     for line in made.warnings:
         log(f"  {variant.name}: {line}")
     log(f"built {variant.name} ({variant.describe()}) in {time.perf_counter() - start:.0f} s")
@@ -523,7 +534,8 @@ def main(argv: list[str] | None = None) -> int:
         for row in rows:
             variant = variants[names.index(row["variant"])]
             row.update(machine, compiler=compilers[row["variant"]], cxx=variant.cxx,
-                       flags=variant.flags, rev=variant.rev, repeats=opts.repeats)  # fmt: skip
+                       flags=variant.flags, cmake=variant.cmake, rev=variant.rev,
+                       repeats=opts.repeats)  # fmt: skip
         with atomic_path(opts.json) as tmp:
             tmp.write_text(json.dumps(rows, indent=1) + "\n")
         print(f"rows: {opts.json}")

@@ -31,6 +31,9 @@ def test_a_spec_is_a_name_then_keys_with_shell_quoting() -> None:
     assert parse_variant('c22 cxx=clang++-22 flags="-mtune=znver4 -DX=1" rev=HEAD~1') == Variant(
         "c22", cxx="clang++-22", flags="-mtune=znver4 -DX=1", rev="HEAD~1"
     )
+    assert parse_variant("rkl cmake='-DRTLAB_MARCH=rocketlake -DX=1'").cmake == (
+        "-DRTLAB_MARCH=rocketlake -DX=1"
+    )
     assert parse_variant("installed").installed
     assert not parse_variant("mine").installed
 
@@ -158,4 +161,5 @@ def test_a_second_build_timed_against_the_installed_core(tmp_path: Path) -> None
         assert other["speed_min"] == pytest.approx(ratios[0])
         assert other["speed_max"] == pytest.approx(ratios[-1])
         assert other["flags"] == "-mtune=generic" and other["compiler"].startswith("Debian Clang")
-    assert (ROOT / "build" / "ab" / "generic" / "build").is_dir()
+    configured = ROOT / "build" / "ab" / "generic" / "build" / "rtlab-options.json"
+    assert "-DCMAKE_CXX_FLAGS=-mtune=generic" in json.loads(configured.read_text())
