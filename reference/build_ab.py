@@ -506,6 +506,8 @@ def main(argv: list[str] | None = None) -> int:
                 raise ABError(f"{label}: expected a number >= 1, got {value}")
         if any(n < 1 for n in opts.threads):
             raise ABError(f"--threads: expected numbers >= 1, got {opts.threads}")
+        if opts.size and min(opts.size) < 1:
+            raise ABError(f"--size: expected a width and a height >= 1, got {opts.size}")
         built = [(v, build_variant(v)) for v in variants]
         from reference.bench import cpu
 
@@ -519,6 +521,9 @@ def main(argv: list[str] | None = None) -> int:
     except ABError as error:
         print(f"build_ab: error: {error}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # the workers are stopped by workers()' exit; nothing written
+        print("build_ab: interrupted; no rows written", file=sys.stderr)
+        return 130
     for line in different_outputs(cells, names[0]):
         print(f"output differs: {line}")
     rows = summarize(cells, names)

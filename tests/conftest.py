@@ -39,7 +39,15 @@ def pytest_unconfigure(config: pytest.Config) -> None:
 # unit, handed to whichever worker is free (at most three waiting on each). pytest-xdist 3.8's
 # own loadgroup marks a group by renaming the test's nodeid, which pytest 9 no longer lets it do
 # (every test stays alone), so the units are given here, by module.
-GROUPED = ("tests/reports/", "tests/study/", "tests/batch/", "tests/tracer/test_notebook.py")
+GROUPED = (
+    "tests/reports/",
+    "tests/study/",
+    "tests/batch/",
+    "tests/tracer/test_notebook.py",
+    # Its two runs share one build folder (build/ab/generic), which two workers would each
+    # configure and build at once.
+    "tests/reference/test_build_ab.py",
+)
 
 
 @pytest.hookimpl(optionalhook=True)  # pytest-xdist's hook: `-p no:xdist` runs have none

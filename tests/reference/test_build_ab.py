@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import re
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -163,3 +164,46 @@ def test_a_second_build_timed_against_the_installed_core(tmp_path: Path) -> None
         assert other["flags"] == "-mtune=generic" and other["compiler"].startswith("Debian Clang")
     configured = ROOT / "build" / "ab" / "generic" / "build" / "rtlab-options.json"
     assert "-DCMAKE_CXX_FLAGS=-mtune=generic" in json.loads(configured.read_text())
+
+
+def _workers_running() -> list[str]:
+    found = []
+    for cmdline in Path("/proc").glob("[0-9]*/cmdline"):
+        try:
+            words = cmdline.read_bytes().split(b"\0")
+        except OSError:  # the process ended while we looked
+            continue
+        if b"reference.build_ab" in words and b"--worker" in words:
+            found.append(cmdline.parent.name)
+    return found
+
+
+def test_ctrl_c_stops_the_workers_and_writes_nothing(tmp_path: Path) -> None:
+    """Interrupted in its rounds, the tool stops its workers, says so and writes no rows (the
+    same build of this checkout as above, so ninja has nothing to do when both run)."""
+    out = tmp_path / "ab.json"
+    assert _workers_running() == []
+    run = subprocess.Popen(
+        [sys.executable, "-m", "reference.build_ab", "--variant", "installed",
+         "--variant", "generic flags=-mtune=generic", "--cases", "ex25", "--size", "96", "64",
+         "--rounds", "100000", "--repeats", "1", "--json", str(out)],
+        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    assert run.stdout is not None
+    try:
+        for line in run.stdout:  # the rounds have begun once the first is reported
+            if line.startswith("round 1 of"):
+                break
+        else:
+            pytest.fail(f"no round reported: {run.wait()} {run.stderr.read()[-3000:]}")  # type: ignore[union-attr]
+        assert len(_workers_running()) == 2  # the two variants' workers
+        run.send_signal(signal.SIGINT)
+        code = run.wait(timeout=60)
+    finally:
+        if run.poll() is None:
+            run.kill()
+    assert run.stderr is not None
+    assert code == 130, run.stderr.read()[-3000:]
+    assert "build_ab: interrupted; no rows written" in run.stderr.read()
+    assert not out.exists() and list(tmp_path.iterdir()) == []  # nor a temporary file
+    assert _workers_running() == []
