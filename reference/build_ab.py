@@ -21,7 +21,8 @@ a build that changed the image is not a faster one. ``--allow-different`` times 
 A SPEC is a name, then ``key=value`` words (shell quoting, so flags may hold spaces):
 
     installed                      the core `make` built (.venv), built by nobody here
-    NAME                           this checkout's files, as `make` builds them (Clang 19)
+    NAME                           this checkout's files, as `make` builds them (its
+                                   CORE_CXX, Clang 19)
     NAME cxx=clang++-22            another compiler
     NAME flags="-mtune=znver4"     CMAKE_CXX_FLAGS (before the CMakeLists' own options,
                                    so an -O level there is overridden by its -O3)
@@ -55,14 +56,12 @@ import tarfile
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any
 
-from reference.core_build import ROOT, BuildError, build_core
+from reference.core_build import ROOT, BuildError, build_core, make_cxx
 
-#: Make's compiler for the core (the Makefile's CORE_CXX).
-DEFAULT_CXX = "clang++-19"
 CASES = ("ex25", "bunny-primary", "bunny-diffuse", "cornell-64", "cornell-128")
 _KEYS = ("cxx", "flags", "rev", "cmake")
 #: The installed core, `make`'s build: a variant of this name is not built here.
@@ -77,7 +76,7 @@ class ABError(RuntimeError):
 @dataclass(frozen=True)
 class Variant:
     name: str
-    cxx: str = DEFAULT_CXX
+    cxx: str = field(default_factory=make_cxx)  # the Makefile's CORE_CXX
     flags: str = ""
     rev: str | None = None  # a git revision; None: this checkout's files
     cmake: str = ""  # more CMake options, shell-quoted

@@ -22,6 +22,16 @@ class BuildError(RuntimeError):
     """The core did not configure or build; the message carries the tools' own output."""
 
 
+def make_cxx() -> str:
+    """The compiler `make` builds the core with: the Makefile's CORE_CXX (clang++-19), read
+    from it so that the builds here follow it if it changes."""
+    for line in (ROOT / "Makefile").read_text().splitlines():
+        name, _, value = line.partition(":=")
+        if name.strip() == "CORE_CXX" and value.strip():
+            return value.strip()
+    raise BuildError(f"{ROOT / 'Makefile'} names no CORE_CXX")
+
+
 @dataclass(frozen=True)
 class CoreBuild:
     so: Path  # the extension module, _core.<tag>.so

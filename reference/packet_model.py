@@ -39,7 +39,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from reference.core_build import ROOT, BuildError, build_core
+from reference.core_build import ROOT, BuildError, build_core, make_cxx
 
 #: render_tile_packets()'s symbol: the tile loop into which trace() and trace_level() are inlined.
 TILE_SYMBOL = "_ZN2rt19render_tile_packetsERKNS_13PacketCullingERKNS_5SceneEiiiiPfRNS_9RayCountsE"
@@ -235,7 +235,7 @@ def core_with_symbols() -> Path:
     its symbols and line tables (RelWithDebInfo; the compile options the CMakeLists gives,
     -O3 among them, come after the build type's), in build/packet-model: the installed core,
     like nanobind's every release build, has its symbols stripped."""
-    compiler = f"-DCMAKE_CXX_COMPILER={_tool('clang++-19')}"
+    compiler = f"-DCMAKE_CXX_COMPILER={_tool(make_cxx())}"
     try:
         return build_core(ROOT / "build" / "packet-model", compiler, build_type="RelWithDebInfo").so
     except BuildError as error:

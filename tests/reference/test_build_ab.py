@@ -24,7 +24,7 @@ from reference.build_ab import (
     summarize,
     workers,
 )
-from reference.core_build import ROOT
+from reference.core_build import ROOT, make_cxx
 
 
 def test_a_spec_is_a_name_then_keys_with_shell_quoting() -> None:
@@ -54,6 +54,18 @@ def test_a_spec_is_a_name_then_keys_with_shell_quoting() -> None:
 def test_a_bad_spec_says_what_is_wrong(spec: str, message: str) -> None:
     with pytest.raises(ABError, match=re.escape(message)):
         parse_variant(spec)
+
+
+def test_builds_here_use_the_compiler_make_used() -> None:
+    # The Makefile's CORE_CXX (clang++-19) built the installed core (Debian Clang 19.1.7 ...):
+    # a variant without cxx= is built as make builds it, packet_model's core too.
+    from tracer import _core
+
+    cxx = make_cxx()
+    family, _, version = cxx.partition("++-")
+    assert family == "clang" and _core.compiler_family == "clang"
+    assert f"Clang {version}." in _core.compiler
+    assert parse_variant("mine").cxx == cxx
 
 
 def test_the_turns_reverse_every_other_round() -> None:
