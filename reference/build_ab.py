@@ -53,9 +53,10 @@ import statistics
 import subprocess
 import sys
 import tarfile
+import tempfile
 import time
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any
@@ -158,7 +159,9 @@ def check_variants(variants: list[Variant]) -> None:
 
 def _source(variant: Variant, folder: Path) -> Path:
     """The tree a variant builds from: this checkout, or its commit's files, exported again
-    whenever the commit the revision names is not the one exported last."""
+    whenever the commit the revision names is not the one exported last. The variant's build
+    goes with the old files: git archive gives each file its commit's time, older than the
+    objects built from the last export, so ninja would see nothing changed and keep them."""
     commit = _commit(variant)
     if commit is None:
         return ROOT
@@ -166,6 +169,7 @@ def _source(variant: Variant, folder: Path) -> Path:
     if stamp.exists() and stamp.read_text() == commit:
         return source
     shutil.rmtree(source, ignore_errors=True)
+    shutil.rmtree(folder / "build", ignore_errors=True)
     source.mkdir(parents=True)
     archive = subprocess.run(
         ["git", "-C", str(ROOT), "archive", "--format=tar", commit], capture_output=True, check=True
@@ -298,6 +302,7 @@ def worker(so: str, stdin: IO[str], stdout: IO[str]) -> None:
 class Worker:
     variant: Variant
     process: subprocess.Popen[str]
+    errors: IO[str]  # the process's stderr
     compiler: str = ""
 
     def ask(self, request: dict[str, Any]) -> dict[str, Any]:
@@ -311,7 +316,8 @@ class Worker:
         line = self.process.stdout.readline()
         if not line:
             self.process.wait()
-            err = self.process.stderr.read()[-3000:] if self.process.stderr else ""
+            self.errors.seek(0)
+            err = self.errors.read()[-3000:]
             raise ABError(
                 f"the worker of variant {self.variant.name} stopped "
                 f"(exit {self.process.returncode}):\n{err}"
@@ -327,22 +333,29 @@ def workers(built: list[tuple[Variant, Path]]) -> Iterator[list[Worker]]:
     """A worker process per variant, stopped however the block ends."""
     env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "PYTHONPATH": str(ROOT)}
     started: list[Worker] = []
-    try:
-        for variant, so in built:
-            process = subprocess.Popen(
-                [sys.executable, "-m", "reference.build_ab", "--worker", str(so)],
-                stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                text=True, cwd=ROOT, env=env,
-            )  # fmt: skip
-            started.append(Worker(variant, process))
-        for w in started:
-            w.compiler = w.answer()["compiler"]
-        yield started
-    finally:
-        for w in started:
-            if w.process.poll() is None:
-                w.process.kill()
-            w.process.wait()
+    with ExitStack() as files:
+        try:
+            for variant, so in built:
+                # Its errors go to a file, read when it fails: a pipe nobody reads while it
+                # runs would stop it once full.
+                errors = files.enter_context(tempfile.TemporaryFile("w+"))
+                process = subprocess.Popen(
+                    [sys.executable, "-m", "reference.build_ab", "--worker", str(so)],
+                    stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=errors,
+                    text=True, cwd=ROOT, env=env,
+                )  # fmt: skip
+                started.append(Worker(variant, process, errors))
+            for w in started:
+                w.compiler = w.answer()["compiler"]
+            yield started
+        finally:
+            for w in started:
+                if w.process.poll() is None:
+                    w.process.kill()
+                w.process.wait()
+                for pipe in (w.process.stdin, w.process.stdout):
+                    if pipe is not None:
+                        pipe.close()
 
 
 # -- The rounds and their summary ------------------------------------------------------------

@@ -44,7 +44,7 @@ GROUPED = (
     "tests/study/",
     "tests/batch/",
     "tests/tracer/test_notebook.py",
-    # Its two runs share one build folder (build/ab/generic), which two workers would each
+    # Its two runs share one build folder (build/ab/head), which two workers would each
     # configure and build at once.
     "tests/reference/test_build_ab.py",
 )

@@ -147,35 +147,76 @@ def test_a_failing_case_names_its_variant() -> None:
         assert answer["seconds"] > 0 and len(answer["digest"]) == 16
 
 
-def test_a_second_build_timed_against_the_installed_core(tmp_path: Path) -> None:
-    """A real build of this checkout tuned for no particular processor, against make's build:
-    both render Ex 25 and trace the bunny's rays to the same bits (tuning changes the schedule,
-    not one IEEE operation: the build forbids contraction into fused multiply-adds), so the
-    tool times them and its rows agree with its own round times."""
+#: A build of the last commit's files (git archive), tuned for no particular processor: the
+#: end-to-end tests' variant (both, so that the second finds it built).
+HEAD_GENERIC = "head rev=HEAD flags=-mtune=generic"
+
+
+def _cpp_is_head() -> bool:
+    """Whether the checkout's C++ and CMakeLists are the last commit's (always so in CI's fresh
+    clone; a developer's uncommitted change makes the installed core another program)."""
+    return (
+        subprocess.run(
+            [
+                "git",
+                "-C",
+                str(ROOT),
+                "diff",
+                "--quiet",
+                "HEAD",
+                "--",
+                "tracer/cpp",
+                "CMakeLists.txt",
+            ]
+        ).returncode
+        == 0
+    )
+
+
+def test_a_commit_built_afresh_against_the_installed_core(tmp_path: Path) -> None:
+    """A real build of the last commit's files, tuned for no particular processor, against
+    make's build of the same source: both render Ex 25 to the same bits (tuning changes the
+    schedule, not one IEEE operation: the build forbids contraction into fused multiply-adds),
+    so the tool times them, and its rows agree with its own round times."""
     out = tmp_path / "ab.json"
+    same_source = _cpp_is_head()
     done = _run(
-        "--variant", "installed", "--variant", "generic flags=-mtune=generic",
-        "--cases", "ex25", "--threads", "1", "2", "--size", "96", "64",
-        "--rounds", "2", "--repeats", "1", "--json", str(out),
+        "--variant", "installed", "--variant", HEAD_GENERIC, "--cases", "ex25",
+        "--threads", "1", "2", "--size", "96", "64", "--rounds", "2", "--repeats", "1",
+        "--json", str(out), *([] if same_source else ["--allow-different"]),
     )  # fmt: skip
     assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
-    assert "output differs" not in done.stdout
-    assert "generic: " in done.stdout and "-mtune=generic, this checkout" in done.stdout
+    if same_source:
+        assert "output differs" not in done.stdout
+    commit = subprocess.run(
+        ["git", "-C", str(ROOT), "rev-parse", "HEAD"], capture_output=True, text=True, check=True
+    ).stdout.strip()
+    assert "-mtune=generic, commit HEAD" in done.stdout
+    assert (ROOT / "build" / "ab" / "head" / "src.commit").read_text() == commit
     rows = json.loads(out.read_text())
     assert [(r["case"], r["threads"], r["variant"]) for r in rows] == [
         ("ex25", 1, "installed"),
-        ("ex25", 1, "generic"),
+        ("ex25", 1, "head"),
         ("ex25", 2, "installed"),
-        ("ex25", 2, "generic"),
+        ("ex25", 2, "head"),
     ]
     for base, other in (rows[0:2], rows[2:4]):
         assert base["speed_vs_first"] == 1.0
         ratios = sorted(b / t for b, t in zip(base["rounds"], other["rounds"], strict=True))
         assert other["speed_min"] == pytest.approx(ratios[0])
         assert other["speed_max"] == pytest.approx(ratios[-1])
-        assert other["flags"] == "-mtune=generic" and other["compiler"].startswith("Debian Clang")
-    configured = ROOT / "build" / "ab" / "generic" / "build" / "rtlab-options.json"
+        assert other["flags"] == "-mtune=generic" and other["rev"] == "HEAD"
+        assert other["compiler"].startswith("Debian Clang")
+    configured = ROOT / "build" / "ab" / "head" / "build" / "rtlab-options.json"
     assert "-DCMAKE_CXX_FLAGS=-mtune=generic" in json.loads(configured.read_text())
+
+
+def test_a_worker_that_dies_is_named_with_its_error(tmp_path: Path) -> None:
+    not_a_core = tmp_path / "_core.so"
+    not_a_core.write_text("not an extension")
+    dies = r"(?s)the worker of variant broken stopped \(exit 1\):.*ImportError"
+    with pytest.raises(ABError, match=dies), workers([(Variant("broken"), not_a_core)]):
+        pass
 
 
 def _workers_running() -> list[str]:
@@ -197,8 +238,8 @@ def test_ctrl_c_stops_the_workers_and_writes_nothing(tmp_path: Path) -> None:
     assert _workers_running() == []
     run = subprocess.Popen(
         [sys.executable, "-m", "reference.build_ab", "--variant", "installed",
-         "--variant", "generic flags=-mtune=generic", "--cases", "ex25", "--size", "96", "64",
-         "--rounds", "100000", "--repeats", "1", "--json", str(out)],
+         "--variant", HEAD_GENERIC, "--cases", "ex25", "--size", "96", "64",
+         "--rounds", "100000", "--repeats", "1", "--allow-different", "--json", str(out)],
         cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )  # fmt: skip
     assert run.stdout is not None
