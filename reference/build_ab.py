@@ -15,8 +15,9 @@ and the median [range] of that ratio over the rounds.
 
 Before any timing counts, each case's output (the image, or the hits) must be the same bit for
 bit in every variant as in the first, thread count by thread count: a change of speed is
-measured on the same work, and a build that changed the image is not a faster one. ``--allow-
-different`` times them anyway (a change meant to alter the output) and says which differ.
+measured on the same work, and a build that changed the image is not a faster one.
+``--allow-different`` times them anyway (a change meant to alter the output) and says which
+differ.
 
 A SPEC is a name, then ``key=value`` words (shell quoting, so flags may hold spaces):
 
