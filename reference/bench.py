@@ -504,9 +504,7 @@ def format_ratios(rows: list[dict[str, Any]]) -> str:
             ratio = ""
             if ours is not None and name != "rtlab":
                 x = _ratio(ours, r)
-                ratio = (
-                    f"   rtlab is {x:.2f}x faster" if x >= 1 else f"   rtlab is {1 / x:.2f}x slower"
-                )
+                ratio = "   " + speed_words(x, x, x, 1)
             lines.append(f"  {name:<16}{r['value']:>10.4f} {r['unit']}{ratio}")
     lines += format_scaling(rows)
     if rows:
@@ -707,6 +705,16 @@ def _with_range(x: float, low: float, high: float, runs: int) -> str:
     return f"{x:.2f}x" if runs == 1 else f"{x:.2f}x [{low:.2f}-{high:.2f}]"
 
 
+def speed_words(x: float, low: float, high: float, runs: int) -> str:
+    """rtlab's speed-up x over a renderer (median, and its least and greatest over `runs`
+    runs) in words, one run or several alike: "rtlab is 10.00x faster [8.00-12.00]", or where
+    the median is below 1, "rtlab is 1.25x slower [1.11-1.43]" (the range as slow-downs too)."""
+    word = "faster" if x >= 1 else "slower"
+    if x < 1:
+        x, low, high = 1 / x, 1 / high, 1 / low
+    return f"rtlab is {x:.2f}x {word}" + (f" [{low:.2f}-{high:.2f}]" if runs > 1 else "")
+
+
 def _scaling_lines(gains: dict[tuple[str, str, str], list[float]]) -> list[str]:
     lines = []
     for suite, case in sorted({(s, c) for s, c, _ in gains}):
@@ -730,8 +738,8 @@ def format_summary(runs: list[list[dict[str, Any]]]) -> str:
                 continue
             ratio = ""
             if "ratio" in r:
-                ratio = "   rtlab " + _with_range(r["ratio"], r["ratio_min"], r["ratio_max"],
-                                                  len(r["ratios"]))  # fmt: skip
+                ratio = "   " + speed_words(r["ratio"], r["ratio_min"], r["ratio_max"],
+                                            len(r["ratios"]))  # fmt: skip
             lines.append(f"  {r['renderer']:<16}{r['value']:>10.4f} {r['unit']}{ratio}")
     lines += _scaling_lines(summarize_scaling(runs))
     if rows and rows[0].get("machine"):

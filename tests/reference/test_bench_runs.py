@@ -15,6 +15,7 @@ from reference.bench import (
     format_summary,
     format_summary_markdown,
     read_runs,
+    speed_words,
     suite_classic,
     summarize_runs,
     summarize_scaling,
@@ -102,7 +103,7 @@ def test_times_to_error_are_made_in_each_run_then_summarised():
 def test_one_run_summarised_is_its_figures_without_ranges():
     text = format_summary(DRIFTING[:1])
     assert text.splitlines()[0] == "1 run"
-    assert "  povray             10.0000 s   rtlab 10.00x\n" in text + "\n"
+    assert "  povray             10.0000 s   rtlab is 10.00x faster\n" in text + "\n"
     table = format_summary_markdown(DRIFTING[:1], "c")
     assert "| ex25 | 1 | 1 s | 10 s (rtlab 10.00x) |" in table and "1 run. CPU" in table
 
@@ -151,7 +152,7 @@ def test_summarize_through_the_cli(tmp_path, capsys):
     args = ["bench", "--summarize", *map(str, paths), "--markdown", str(md)]
     assert main(args) == 0
     printed = capsys.readouterr().out
-    assert "  povray             16.0000 s   rtlab 10.00x [8.00-12.00]" in printed
+    assert "  povray             16.0000 s   rtlab is 10.00x faster [8.00-12.00]" in printed
     table = md.read_text()
     assert "| ex25 | 1 | 2 s | 16 s (rtlab 10.00x [8.00-12.00]) |" in table
     assert f"Command: `rtlab bench --summarize {' '.join(map(str, paths))}`." in table
@@ -203,3 +204,12 @@ def test_a_ctrl_c_lost_in_a_finaliser_stops_the_alternating_runs(lost_interrupt)
     with pytest.raises(interrupt.Interrupted):
         _best_alternating({"a": (partial(calls.append, "a"), 3), "b": (lambda: 1.0, 3)})
     assert calls == []
+
+
+def test_one_run_and_several_say_the_speed_in_the_same_words():
+    # A single run (format_ratios()) and a summary of runs (format_summary()) word rtlab's
+    # speed alike; below 1 it is a slow-down, its range turned round with it.
+    assert speed_words(10.0, 10.0, 10.0, 1) == "rtlab is 10.00x faster"
+    assert speed_words(10.0, 8.0, 12.0, 5) == "rtlab is 10.00x faster [8.00-12.00]"
+    assert speed_words(0.8, 0.7, 0.9, 5) == "rtlab is 1.25x slower [1.11-1.43]"
+    assert speed_words(0.8, 0.8, 0.8, 1) == "rtlab is 1.25x slower"
