@@ -204,6 +204,7 @@ def build_variant(variant: Variant, log: Callable[[str], None] = print) -> Path:
     configured = folder / "build" / "rtlab-options.json"
     if configured.exists() and json.loads(configured.read_text()) != options:
         shutil.rmtree(folder / "build")
+    log(f"building {variant.name} ({variant.describe()}) in {folder / 'build'}")
     start = time.perf_counter()
     try:
         made = build_core(folder / "build", *options, source=_source(variant, folder))
@@ -212,7 +213,7 @@ def build_variant(variant: Variant, log: Callable[[str], None] = print) -> Path:
     configured.write_text(json.dumps(options))
     for line in made.warnings:
         log(f"  {variant.name}: {line}")
-    log(f"built {variant.name} ({variant.describe()}) in {time.perf_counter() - start:.0f} s")
+    log(f"built {variant.name} in {time.perf_counter() - start:.0f} s")
     return made.so
 
 
