@@ -62,7 +62,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any
 
-from reference.core_build import ROOT, BuildError, build_core, make_cxx
+from reference.core_build import ROOT, BuildError, build_core, load_core, make_cxx
 
 CASES = ("ex25", "bunny-primary", "bunny-diffuse", "cornell-64", "cornell-128")
 _KEYS = ("cxx", "flags", "rev", "cmake")
@@ -273,14 +273,7 @@ def worker(so: str, stdin: IO[str], stdout: IO[str]) -> None:
     """Serve timings with the core at `so` loaded as tracer._core: one JSON request a line
     ({"case", "threads", "repeats", "size"}), one JSON answer a line ({"seconds": the best of
     the repeats, "digest"}, or {"error"}); the first answer names the core's compiler."""
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location("tracer._core", so)
-    if spec is None or spec.loader is None:
-        raise SystemExit(f"{so}: not a Python extension")
-    core = importlib.util.module_from_spec(spec)
-    sys.modules["tracer._core"] = core
-    spec.loader.exec_module(core)
+    core = load_core(so)
     print(json.dumps({"compiler": str(core.compiler)}), file=stdout, flush=True)
     runners: dict[tuple[str, Any], Callable[[int], tuple[float, str]]] = {}
     for line in stdin:

@@ -9,10 +9,13 @@ own folder; the callers name them so."""
 
 from __future__ import annotations
 
+import importlib.util
+import os
 import subprocess
 import sys
 from dataclasses import dataclass
 from pathlib import Path
+from types import ModuleType
 
 ROOT = Path(__file__).resolve().parents[1]
 VENV_BIN = Path(sys.executable).parent
@@ -75,3 +78,16 @@ def build_core(
         line for line in output.splitlines() if "warning:" in line and "nanobind" not in line
     )
     return CoreBuild(built[0], warnings)
+
+
+def load_core(so: str | os.PathLike[str]) -> ModuleType:
+    """Load the extension at `so` as tracer._core, before anything imports tracer (which then
+    renders with it): how another build of the core is run (tests/with_core.py, build_ab's
+    workers, packet_model's traced process). Raises ImportError where `so` is no extension."""
+    spec = importlib.util.spec_from_file_location("tracer._core", so)
+    if spec is None or spec.loader is None:
+        raise ImportError(f"{so}: not a Python extension")
+    core = importlib.util.module_from_spec(spec)
+    sys.modules["tracer._core"] = core
+    spec.loader.exec_module(core)
+    return core

@@ -39,7 +39,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from reference.core_build import ROOT, BuildError, build_core, make_cxx
+from reference.core_build import ROOT, BuildError, build_core, load_core, make_cxx
 
 #: render_tile_packets()'s symbol: the tile loop into which trace() and trace_level() are inlined.
 TILE_SYMBOL = "_ZN2rt19render_tile_packetsERKNS_13PacketCullingERKNS_5SceneEiiiiPfRNS_9RayCountsE"
@@ -81,11 +81,9 @@ gdb.execute("kill")
 
 # The traced process: Ex 25 rendered over and over on one thread by the core at argv[1].
 RENDER_LOOP = """
-import importlib.util, sys, time
-spec = importlib.util.spec_from_file_location("tracer._core", sys.argv[1])
-core_module = importlib.util.module_from_spec(spec)
-sys.modules["tracer._core"] = core_module
-spec.loader.exec_module(core_module)
+import sys, time
+from reference.core_build import load_core
+core_module = load_core(sys.argv[1])
 from tracer.render import core_integrator, to_core
 from tracer.scene import load_scene
 from tracer.scenes import demo_scene_path
@@ -410,14 +408,9 @@ def main(argv: list[str] | None = None) -> int:
     )  # fmt: skip
     args = parser.parse_args(argv)
     try:
-        import importlib.util
-
         so = args.so or core_with_symbols()
         # Loaded here as the traced process loads it, for its packet width.
-        spec = importlib.util.spec_from_file_location("tracer._core", so)
-        assert spec is not None and spec.loader is not None
-        core_module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(core_module)
+        core_module = load_core(so)
         width, height = args.size
         packets = trace_packets(so, *args.pixel, args.packets, width, height,
                                 core_module.rays_per_packet)  # fmt: skip

@@ -10,9 +10,10 @@ the wrong build would pass for the wrong reason. LD_PRELOAD (the sanitizer's run
 be this process's first library) is dropped for the processes the tests start: they run the
 ordinary .venv build."""
 
-import importlib.util
 import os
 import sys
+
+from reference.core_build import load_core
 
 EXPECTED = {
     "sanitized": lambda core: core.sanitized,
@@ -29,11 +30,7 @@ def main(argv: list[str]) -> int:
         raise SystemExit(f"usage: python -m tests.with_core CORE.so {{{','.join(EXPECTED)}}} ...")
     path, expected, *pytest_args = argv
     os.environ.pop("LD_PRELOAD", None)
-    spec = importlib.util.spec_from_file_location("tracer._core", path)
-    assert spec is not None and spec.loader is not None, f"{path}: not a Python extension"
-    core = importlib.util.module_from_spec(spec)
-    sys.modules["tracer._core"] = core
-    spec.loader.exec_module(core)
+    core = load_core(path)
     if not EXPECTED[expected](core):
         raise SystemExit(
             f"{path}: not the {expected} build (compiler {core.compiler}, "
