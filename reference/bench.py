@@ -97,6 +97,17 @@ def _best_alternating(runs: dict[str, tuple[Callable[[], float], int]]) -> dict[
     return {name: min(t) for name, t in times.items()}
 
 
+def ex25_scene(width: int = 1920, height: int = 1024) -> Any:
+    """The demo scene (Ex 25) at width x height, 1 spp: the classic suite's frame."""
+    return load_scene(demo_scene_path()).with_overrides(width=width, height=height, spp=1)
+
+
+def cornell_scene(size: int, spp: int = 64) -> Any:
+    """The Cornell box at size x size, spp samples a pixel: the convergence suite's scaling."""
+    scene = load_scene(Path(__file__).resolve().parent / "scenes" / "cornell_box.toml")
+    return scene.with_overrides(width=size, height=size, spp=spp)
+
+
 def suite_classic(
     repeats: int = 3, threads: tuple[int, ...] = (1, 2), width: int = 1920, height: int = 1024
 ) -> list[dict[str, Any]]:
@@ -104,7 +115,7 @@ def suite_classic(
     from reference.mitsuba import run_mitsuba
     from reference.povray import run_povray
 
-    scene = load_scene(demo_scene_path()).with_overrides(width=width, height=height, spp=1)
+    scene = ex25_scene(width, height)
     case = f"ex25-{width}x{height}"
     rows = []
     for n in threads:
@@ -207,8 +218,10 @@ def _offset_origins(
     return np.where(back, np.nextafter(rounded, away), rounded)
 
 
-# The seed of `rtlab bench geometry`'s diffuse rays (both renderers' copies of them).
+# The seed of `rtlab bench geometry`'s diffuse rays (both renderers' copies of them), and
+# how many it traces.
 DIFFUSE_SEED = 12
+DIFFUSE_RAYS = 2_000_000
 
 
 def _rays_leaving(
@@ -271,7 +284,7 @@ def suite_geometry(
     threads: tuple[int, ...] = (1, 2),
     width: int = 1920,
     height: int = 1024,
-    diffuse: int = 2_000_000,
+    diffuse: int = DIFFUSE_RAYS,
 ) -> list[dict[str, Any]]:
     """Rays per second on the Stanford bunny (99,785 triangles), closest hit only, rtlab
     (its hierarchy, double precision, watertight) against Embree's single-ray kernel (embreex,
@@ -423,10 +436,9 @@ def cornell_scaling(
     same 278 ms in all three), where the scaling alone gave 1.89x to 2.00x in seven tries:
     something held a core for the second or so the three renders span. Five span about two
     seconds at 64x64 (and eight at 128x128) for some 4 s more a run."""
-    scene = load_scene(Path(__file__).resolve().parent / "scenes" / "cornell_box.toml")
     rows = []
     for size in sizes:
-        sized = scene.with_overrides(width=size, height=size, spp=spp)
+        sized = cornell_scene(size, spp)
         best: dict[int, float] = {}
         for _ in range(repeats):
             for n in (1, 2):

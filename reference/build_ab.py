@@ -231,21 +231,24 @@ def _digest(*arrays: Any) -> str:
 
 def _case_runner(case: str, size: tuple[int, int] | None) -> Callable[[int], tuple[float, str]]:
     """A function of a thread count that runs `case` once: (seconds, digest of its output)."""
-    from reference.bench import DIFFUSE_SEED, bunny_alone, diffuse_rays
+    from reference.bench import (
+        DIFFUSE_RAYS,
+        DIFFUSE_SEED,
+        bunny_alone,
+        cornell_scene,
+        diffuse_rays,
+        ex25_scene,
+    )
     from tracer.render import render_with_stats, to_core
-    from tracer.scene import load_scene
-    from tracer.scenes import demo_scene_path
 
     width, height = size or (1920, 1024)
     if case in ("ex25", "bunny-primary", "cornell-64", "cornell-128"):
         if case == "ex25":
-            scene = load_scene(demo_scene_path()).with_overrides(width=width, height=height, spp=1)
+            scene = ex25_scene(width, height)
         elif case == "bunny-primary":
             scene = bunny_alone(width, height)
         else:
-            side = int(case.split("-")[1])
-            scene = load_scene(ROOT / "reference" / "scenes" / "cornell_box.toml")
-            scene = scene.with_overrides(width=side, height=side, spp=64)
+            scene = cornell_scene(int(case.split("-")[1]))
 
         def render(threads: int) -> tuple[float, str]:
             done = render_with_stats(scene, threads=threads, progress=False)
@@ -257,7 +260,7 @@ def _case_runner(case: str, size: tuple[int, int] | None) -> Callable[[int], tup
 
         bunny = bunny_alone()
         mesh = bunny.objects[0]
-        origins, directions = diffuse_rays(mesh.vertices, mesh.faces, 2_000_000, DIFFUSE_SEED)
+        origins, directions = diffuse_rays(mesh.vertices, mesh.faces, DIFFUSE_RAYS, DIFFUSE_SEED)
         core = to_core(bunny)
 
         def trace(threads: int) -> tuple[float, str]:

@@ -84,11 +84,9 @@ RENDER_LOOP = """
 import sys, time
 from reference.core_build import load_core
 core_module = load_core(sys.argv[1])
+from reference.bench import ex25_scene
 from tracer.render import core_integrator, to_core
-from tracer.scene import load_scene
-from tracer.scenes import demo_scene_path
-scene = load_scene(demo_scene_path()).with_overrides(width=int(sys.argv[2]),
-                                                     height=int(sys.argv[3]), spp=1)
+scene = ex25_scene(int(sys.argv[2]), int(sys.argv[3]))
 core, integrator = to_core(scene), core_integrator(scene, True)
 start = time.perf_counter()
 while time.perf_counter() - start < 600:
