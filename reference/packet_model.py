@@ -1,7 +1,7 @@
 """Where a core's time goes in Ex 25's packets, by a model of the processor (issue 12).
 
 ``python -m reference.packet_model [--so CORE.so] [--pixel X Y] [--packets N] [--cpu NAME...]
-[--where N]``
+[--where N] [--mnemonics N]``
 
 There are no hardware counters on these machines, so this steps through the packet tracer
 instruction by instruction instead: gdb runs Ex 25 (1920x1024, 1 spp, one thread) in the core
@@ -14,10 +14,13 @@ branch were foreseen: cycles a packet, instructions a cycle, and the resources t
 back. Its first use: why the Intel Xeon of this machine class (family 6, model 167: Rocket
 Lake) gives rtlab lower ratios than the Zen 4 (reference/speed-log.md). The model counts issue
 ports and dependences, not the stack's traffic nor mispredictions: it says where a core's time
-goes, not which of two builds a few per cent apart is faster (the speed log has three it ranked
-wrongly). ``--where N`` also lists where in the source the instructions came from: by step (the
-line of trace_level(), trace() or render_tile_packets() each was inlined from, read from the
-core's inlining chains by addr2line) and by the innermost function.
+goes, not which of two builds a few per cent apart is faster (the speed log has several it
+ranked wrongly, Clang 22 against Clang 19 on both machines among them). ``--where N`` also lists
+where in the source the instructions came from: by step (the line of trace_level(), trace() or
+render_tile_packets() each was inlined from, read from the core's inlining chains by addr2line)
+and by the innermost function. ``--mnemonics N`` lists the N most executed mnemonics a packet,
+how many of each on 512-bit registers, and the operands a packet that name the stack (spills,
+reloads, locals kept in memory): traffic the model leaves out.
 
 Needs gdb, binutils (nm, objdump, addr2line) and llvm-mca-19 (Debian: ``apt-get install gdb
 binutils llvm-19``), which ``make`` does not install, and a core with symbols and line tables:
@@ -353,6 +356,31 @@ def where_time_goes(lines: list[str], places: dict[int, list[tuple[str, str]]], 
     return "\n".join(out)
 
 
+# An operand that names the stack: a spill, its reload, or a local kept in memory.
+STACK_OPERAND = re.compile(r"\(%r[sb]p\)|\(%r[sb]p,")
+
+
+def mnemonic_mix(lines: list[str], packets: int, top: int) -> str:
+    """The `top` most executed mnemonics a packet, each with how many of them name a 512-bit
+    register, and the operands a packet that name the stack (rsp or rbp)."""
+    counts: Counter[str] = Counter()
+    wide: Counter[str] = Counter()
+    stack = 0
+    for line in lines:
+        if "\t" not in line:
+            continue
+        text = line.split("\t", 1)[1]
+        mnemonic = text.split()[0]
+        counts[mnemonic] += 1
+        wide[mnemonic] += "%zmm" in text
+        stack += len(STACK_OPERAND.findall(text))
+    out = [f"  {'a packet':>9} {'on zmm':>7}  mnemonic"]
+    for mnemonic, n in counts.most_common(top):
+        out.append(f"  {n / packets:9.1f} {wide[mnemonic] / packets:7.1f}  {mnemonic}")
+    out.append(f"  {stack / packets:9.1f} {'':>7}  operands naming the stack (rsp, rbp)")
+    return "\n".join(out)
+
+
 def model(asm: str, cpu: str, iterations: int = 20) -> CoreModel:
     """The block timed by llvm-mca-19 on its model of `cpu` (repeated `iterations` times)."""
     done = subprocess.run(
@@ -404,6 +432,11 @@ def main(argv: list[str] | None = None) -> int:
         help="also list the N steps (lines of trace_level(), trace() or render_tile_packets()) "
         "and the N innermost functions the most instructions came from",
     )  # fmt: skip
+    parser.add_argument(
+        "--mnemonics", type=int, default=0, metavar="N",
+        help="also list the N most executed mnemonics a packet (how many on 512-bit registers) "
+        "and the operands a packet that name the stack",
+    )  # fmt: skip
     args = parser.parse_args(argv)
     try:
         so = args.so or core_with_symbols()
@@ -422,6 +455,8 @@ def main(argv: list[str] | None = None) -> int:
         if args.where > 0:
             offsets = [int(line.split("\t", 1)[0], 16) for line in lines if "\t" in line]
             print(where_time_goes(lines, source_places(so, offsets), args.where, source_text))
+        if args.mnemonics > 0:
+            print(mnemonic_mix(lines, n, args.mnemonics))
         for cpu in args.cpu or ["znver4", "rocketlake"]:
             m = model(trace_to_asm(lines), cpu)
             held = ", ".join(f"{r} {p:.0f}%" for r, p in

@@ -7,6 +7,7 @@ from __future__ import annotations
 import pytest
 
 from reference.packet_model import (
+    mnemonic_mix,
     packet_index,
     packet_store,
     parse_addr2line,
@@ -200,3 +201,20 @@ def test_source_text_reads_the_line_at_a_place(tmp_path) -> None:
     assert source_text(f"{header}:1") == "one"
     assert source_text(f"{header}:3") == "" and source_text(f"{header}:?") == ""
     assert source_text(f"{tmp_path / 'missing.h'}:1") == ""
+
+
+def test_mnemonic_mix_counts_per_packet_wide_registers_and_stack_operands() -> None:
+    trace = [
+        "27733\tvmulpd %zmm1,%zmm2,%zmm3",
+        "27733\tvmulpd %ymm1,%ymm2,%ymm3",  # not a 512-bit register
+        "26f35\tvmovapd %zmm1,0x40(%rsp)",  # a spill
+        "#packet",
+        "26f40\tvmovapd -0x80(%rbp),%zmm4",  # a reload through the frame pointer
+        "26f45\tmov (%rax),%rcx",  # memory, not the stack
+        "26f48\tvaddpd 0x10(%rsp,%rax,8),%zmm1,%zmm2",  # indexed from the stack
+    ]
+    rows = [r.split() for r in mnemonic_mix(trace, packets=2, top=2).splitlines()]
+    assert rows[0] == ["a", "packet", "on", "zmm", "mnemonic"]
+    assert ["1.0", "0.5", "vmulpd"] in rows[1:3] and ["1.0", "1.0", "vmovapd"] in rows[1:3]
+    assert len(rows) == 4  # top 2, then the stack
+    assert rows[3][0] == "1.5" and "stack" in rows[3]
