@@ -495,6 +495,21 @@ struct ClosestL {
 
 inline Mask select(Mask m, Mask a, Mask b) { return m ? a : b; }
 
+// Whether `skip` holds every sphere of the scene. closest_hit() and any_hit() then leave out
+// the spheres' set-up too: 1/(d.d), a division of eight lanes that no test takes. Nearly all of
+// Ex 25's sky and floor packets skip every sphere at their first level, the floor's shadow rays
+// and reflections too: four of a floor packet's eight divisions. On the Intel Xeon (Rocket
+// Lake) a 512-bit division holds the divider 16 cycles: Ex 25 1.049x [1.019-1.083] on one
+// thread and 1.073x [1.061-1.096] on two (7 rounds, the same bits; reference/speed-log.md). On
+// the Zen 4, whose divider is faster, the same change measured 0.984x in an older state of
+// this code (within what a change's register allocation moves there).
+inline bool every_sphere(const Scene &scene, unsigned skip) {
+    const size_t n = scene.spheres.size();
+    if (n > size_t(max_culled)) return false;
+    const unsigned all = n == size_t(max_culled) ? ~0u : (1u << n) - 1;
+    return (skip & all) == all;
+}
+
 // `skip`: bit i set where no ray of the packet can meet sphere i (i < 32; primary rays outside
 // its image rectangle, render_tile_packets()): its test, which would find nothing, is left out
 // (and counted all the same).
@@ -503,16 +518,18 @@ inline ClosestL closest_hit(const Scene &scene, const RayL &ray, Mask active, Ra
     ClosestL c{splat(infinity), Mask{} - 1};
     counts.primitive_tests +=
         uint64_t(count(active)) * (scene.spheres.size() + scene.planes.size());
-    const Lanes a = dot(ray.d, ray.d), inv_a = 1 / a;
-    int64_t id = 0;
-    for (size_t i = 0; i < scene.spheres.size(); ++i, ++id) {
-        if (i < max_culled && (skip >> i & 1)) continue;
-        Lanes t = sphere_t(scene.spheres[i], ray, a, inv_a, c.t, active);
-        Mask closer = active & (t < c.t);
-        if (!any(closer)) continue;
-        c.t = select(closer, t, c.t);
-        c.id = select(closer, Mask{} + id, c.id);
+    if (!every_sphere(scene, skip)) {
+        const Lanes a = dot(ray.d, ray.d), inv_a = 1 / a;
+        for (size_t i = 0; i < scene.spheres.size(); ++i) {
+            if (i < max_culled && (skip >> i & 1)) continue;
+            Lanes t = sphere_t(scene.spheres[i], ray, a, inv_a, c.t, active);
+            Mask closer = active & (t < c.t);
+            if (!any(closer)) continue;
+            c.t = select(closer, t, c.t);
+            c.id = select(closer, Mask{} + int64_t(i), c.id);
+        }
     }
+    int64_t id = int64_t(scene.spheres.size()); // planes are numbered after the spheres
     for (size_t i = 0; i < scene.planes.size(); ++i, ++id) {
         if (!any(active & may_be_ahead(scene.planes[i], ray))) continue;
         Lanes t = plane_t(scene.planes[i], ray);
@@ -539,13 +556,17 @@ inline ClosestL closest_hit(const Scene &scene, const RayL &ray, Mask active, Ra
 inline Mask any_hit(const Scene &scene, const RayL &ray, Lanes max, Mask active,
                     RayCounts &counts, unsigned skip = 0) {
     Mask blocked = mask_all(false);
-    const Lanes a = dot(ray.d, ray.d), inv_a = 1 / a;
-    for (size_t i = 0; i < scene.spheres.size(); ++i) {
-        counts.primitive_tests += uint64_t(count(active & ~blocked));
-        if (i < max_culled && (skip >> i & 1)) continue;
-        const Sphere &s = scene.spheres[i];
-        blocked |= active & (sphere_t(s, ray, a, inv_a, max, active & ~blocked) != infinity);
-        if (!any(active & ~blocked)) return blocked;
+    if (every_sphere(scene, skip)) { // counted all the same, as a test that found nothing
+        counts.primitive_tests += uint64_t(count(active)) * scene.spheres.size();
+    } else {
+        const Lanes a = dot(ray.d, ray.d), inv_a = 1 / a;
+        for (size_t i = 0; i < scene.spheres.size(); ++i) {
+            counts.primitive_tests += uint64_t(count(active & ~blocked));
+            if (i < max_culled && (skip >> i & 1)) continue;
+            const Sphere &s = scene.spheres[i];
+            blocked |= active & (sphere_t(s, ray, a, inv_a, max, active & ~blocked) != infinity);
+            if (!any(active & ~blocked)) return blocked;
+        }
     }
     for (const Plane &pl : scene.planes) {
         counts.primitive_tests += uint64_t(count(active & ~blocked));
@@ -598,8 +619,11 @@ inline Vec3L select(Mask m, const Vec3 &a, const Vec3L &b) {
 inline HitL hit_record(const Scene &scene, const RayL &ray, const ClosestL &c, Mask active) {
     // Each lane's object, by one select per object some lane hit: sphere centre and radius, or
     // plane point and normal.
+    // 1/radius is selected too, a scalar division a sphere: sphere_hit()'s N = local / radius
+    // is local * (1 / radius) (Vec3::operator/), so the same bits, and a sphere packet's
+    // division fewer (Ex 25 1.015x and 1.020x on the Xeon's one and two threads, 7 rounds).
     Vec3L centre = {}, normal = {};
-    Lanes radius = splat(1.0);
+    Lanes radius = splat(1.0), inv_radius = splat(1.0);
     Mask is_sphere = mask_all(false);
     HitL h;
     h.material = Mask{};
@@ -611,6 +635,7 @@ inline HitL hit_record(const Scene &scene, const RayL &ray, const ClosestL &c, M
         else h.others_met = true;
         centre = select(here, s.center, centre);
         radius = select(here, splat(s.radius), radius);
+        inv_radius = select(here, splat(1 / s.radius), inv_radius);
         is_sphere |= here;
         h.material = select(here, Mask{} + s.material, h.material);
     }
@@ -635,7 +660,7 @@ inline HitL hit_record(const Scene &scene, const RayL &ray, const ClosestL &c, M
         local = local * (radius / len);
         h.p = centre + local;
         h.p_error = abs(local) * splat(gamma(5)) + (abs(centre) + abs(local)) * splat(gamma(1));
-        h.N = local / radius;
+        h.N = local * inv_radius;
     }
     if (planes) { // project back onto the plane
         Vec3L pp = at - normal * dot(at - centre, normal);
