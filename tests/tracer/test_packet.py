@@ -24,6 +24,7 @@ from tests.helpers import (
     sphere,
 )
 from tracer import _core
+from tracer.render import to_core
 
 CLASSIC = classic_scenes()
 
@@ -414,3 +415,107 @@ def random_scene(seed: int) -> dict:
 @pytest.mark.parametrize("seed", range(40))
 def test_packets_equal_single_rays_on_random_scenes(seed):
     packets_agree(tracer.load_scene(random_scene(seed)))
+
+
+# A tile that no sphere's rectangle reaches and through which no plane is seen (12_packet.h
+# plane_unseen(): the sign of each primary ray's direction along the plane's normal, bounded at
+# the tile's corners with a millionth to spare) is filled with the background without tracing a
+# ray. A camera 1 above the floor (or below it) tilted so that the floor's horizon crosses the
+# image at `row`: on a tile's edge (16), between two rows of pixel centres inside a tile (8),
+# through a row of pixel centres (15.5: those rays graze the floor, and the tile above must be
+# traced), and for the left eye of a stereo pair, whose window is shifted.
+SKY = [0.1, 0.2, 0.3]
+
+
+def horizon_scene(row: float, below: bool = False, **render) -> dict:
+    height, fov_y = 40, 60.0
+    tilt = (0.5 - row / height) * 2 * np.tan(np.radians(fov_y / 2))  # d.y = 0 on that row
+    eye_y = -1.0 if below else 1.0
+    return scene_dict(
+        camera={
+            "eye": [0.0, eye_y, 4.0],
+            "look_at": [0.0, eye_y - tilt, 3.0],
+            "fov_y": fov_y,
+            "width": 37,
+            "height": height,
+        },
+        render={"max_depth": 3, "background": SKY, **render},
+        materials={"m": material(ambient=0.2, diffuse=0.6, reflectivity=0.5)},
+        lights=[{"type": "point", "position": [2.0, 3.0 * eye_y, 5.0]}],
+        objects=[plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0]), sphere([1.5, 0.5 * eye_y, -2.0], 0.5)],
+    )
+
+
+@pytest.mark.parametrize("row", [16.0, 8.0, 15.5, 32.0])
+@pytest.mark.parametrize("below", [False, True])
+@pytest.mark.parametrize("stereo", [False, True])
+def test_the_sky_beyond_a_horizon(row, below, stereo):
+    data = horizon_scene(row, below)
+    if stereo:
+        data["camera"]["stereo"] = {"eye_separation": 0.5, "convergence": 4.0,
+                                    "layout": "side_by_side"}  # fmt: skip
+    scene = tracer.load_scene(data)
+    a = packets_agree(scene)
+    # The last row of centres above the horizon and the first below it. From above the floor
+    # the rows above the horizon see the sky; from below, the rows above see the floor.
+    above, under = int(np.ceil(row - 0.5)) - 1, int(np.floor(row + 0.5))
+    sky, floor = (under, above) if below else (above, under)
+    assert (a.image[sky] == np.float32(SKY)).all()  # the one-ray code's image: the sky,
+    assert (a.image[floor] != np.float32(SKY)).any(axis=-1).all()  # and the floor
+    if not stereo and not below:  # the tile of the last sky row: filled where wholly sky
+        tile = 16 * (sky // 16)
+        unseen = _core.plane_unseen(to_core(scene), 0, 0.5, 36.5, tile + 0.5,
+                                    min(tile + 16, 40) - 0.5)  # fmt: skip
+        assert unseen == (row >= tile + 16)
+
+
+def test_a_sky_tile_with_nothing_traced_is_black():
+    """With a min_coefficient above the first level's 1, trace() colours no ray: a filled tile
+    must be black too, and counted as the one-ray code counts it. (fill_background() also
+    blackens max_depth 0, which the scene reader refuses.)"""
+    a = packets_agree(tracer.load_scene(horizon_scene(16.0, min_coefficient=2.0)))
+    assert (a.image == 0).all()
+
+
+def test_plane_unseen_never_hides_a_plane_a_ray_meets():
+    """Where plane_unseen() says no primary ray of a span meets the plane, every pixel centre's
+    ray direction (computed apart, in numpy) has a component along the normal of the sign that
+    never meets it: the opposite of dot(point - eye, n)'s, or zero. Spans of 1 to 16 pixels
+    across random cameras and tilted planes; both answers must occur."""
+    rng = np.random.default_rng(11)
+    answers = {True: 0, False: 0}
+    for seed in range(40):
+        data = random_scene(seed)
+        scene = tracer.load_scene(data)
+        core = to_core(scene)
+        cam = scene.camera
+        eye = np.array(cam.eye)
+        planes = [o for o in scene.objects if type(o).__name__ == "Plane"]
+        for k, pl in enumerate(planes):
+            n = np.array(pl.normal) / np.linalg.norm(pl.normal)
+            num = float(np.dot(np.array(pl.point) - eye, n))
+            for _ in range(20):
+                w, h = (int(v) for v in rng.integers(1, 17, size=2))
+                i0, j0 = (
+                    int(rng.integers(0, cam.width - w + 1)),
+                    int(rng.integers(0, cam.height - h + 1)),
+                )
+                unseen = _core.plane_unseen(core, k, i0 + 0.5, i0 + w - 0.5, j0 + 0.5, j0 + h - 0.5)
+                answers[unseen] += 1
+                if not unseen:
+                    continue
+                for i in range(i0, i0 + w):
+                    for j in range(j0, j0 + h):
+                        along = float(np.dot(pixel_direction(cam, i + 0.5, j + 0.5), n))
+                        assert along == 0 or (along > 0) != (num > 0), (seed, k, i, j)
+    assert min(answers.values()) > 100, answers
+
+
+def test_ex25s_sky_is_filled():
+    """Ex 25 at the bench's size: the top left tile sees neither the floor nor a sphere (so the
+    render fills it), the bottom left one sees the floor."""
+    from reference.bench import ex25_scene
+
+    core = to_core(ex25_scene(1920, 1024))
+    assert _core.plane_unseen(core, 0, 0.5, 15.5, 0.5, 15.5)
+    assert not _core.plane_unseen(core, 0, 0.5, 15.5, 1008.5, 1023.5)

@@ -556,6 +556,18 @@ NB_MODULE(_core, m) {
             return triple(rt::offset_ray_origin(vec(p), vec(p_error), vec(normal), vec(toward)));
         },
         "p"_a, "p_error"_a, "normal"_a, "toward"_a);
+    m.def(
+        "plane_unseen",
+        [](const rt::Scene &scene, size_t plane, double x0, double x1, double y0, double y1) {
+            if (plane >= scene.planes.size())
+                throw nb::index_error("no plane of that number in the scene");
+            return rt::plane_unseen(scene.camera, scene.planes[plane], {x0, x1, y0, y1});
+        },
+        "scene"_a, "plane"_a, "x0"_a, "x1"_a, "y0"_a, "y1"_a,
+        "Whether no primary ray through an image point of [x0, x1] x [y0, y1] (pixel units) can "
+        "meet the scene's plane number `plane` (12_packet.h plane_unseen()): a tile for which "
+        "this holds of every plane, and whose pixels no sphere's rectangle reaches, is filled "
+        "with the background without tracing a ray.");
 
     // Issue 11's study (study/): many rays at once through the scene's own closest_hit() and
     // any_hit(), the functions the renderer runs, so that what the study measures is what a
