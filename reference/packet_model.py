@@ -107,21 +107,34 @@ def tile_side(width: int, height: int, threads: int = 1) -> int:
     return 16 if tiles >= 16 * threads else 8
 
 
-def packet_index(x: int, y: int, width: int, height: int, rays_per_packet: int) -> int:
+#: Whether the render fills the tile of columns [x0, x1) and rows [y0, y1) without a packet.
+TileFilled = Callable[[int, int, int, int], bool]
+
+
+def packet_index(x: int, y: int, width: int, height: int, rays_per_packet: int,
+                 filled: TileFilled | None = None) -> int:  # fmt: skip
     """The 0-based place, in a one-thread render of one sample a pixel, of the packet that holds
     pixel (x, y): 11_render.h's one worker takes the tiles in order, row of tiles by row of
     tiles, and 12_packet.h render_tile_packets() a tile's rows top down, each in packets of
-    rays_per_packet pixels from its left edge (the last one of a row maybe shorter)."""
+    rays_per_packet pixels from its left edge (the last one of a row maybe shorter). A tile
+    that `filled` names (the core's tile_filled(): the sky, coloured without a ray) holds no
+    packet; a pixel in one has none, and raises ValueError."""
     if not (0 <= x < width and 0 <= y < height):
         raise ValueError(f"pixel ({x}, {y}) is outside the {width}x{height} image")
     side = tile_side(width, height)
     tiles_x = -(-width // side)
 
     def packets_in(tx: int, ty: int, rows: int) -> int:  # in the first `rows` rows of a tile
-        tile_w = min(side, width - tx * side)
-        return min(rows, height - ty * side) * -(-tile_w // rays_per_packet)
+        tile_w, tile_h = min(side, width - tx * side), min(side, height - ty * side)
+        if filled is not None and filled(tx * side, ty * side, tx * side + tile_w,
+                                         ty * side + tile_h):  # fmt: skip
+            return 0
+        return min(rows, tile_h) * -(-tile_w // rays_per_packet)
 
     tile_x, tile_y = x // side, y // side
+    if packets_in(tile_x, tile_y, side) == 0:
+        raise ValueError(f"pixel ({x}, {y}) lies in a tile filled with the background without "
+                         "a ray traced: pick a pixel that sees something")  # fmt: skip
     before = sum(packets_in(tx, ty, side) for ty in range(tile_y) for tx in range(tiles_x))
     before += sum(packets_in(tx, tile_y, side) for tx in range(tile_x))
     return before + packets_in(tile_x, tile_y, y - tile_y * side) + (x % side) // rays_per_packet
@@ -242,10 +255,12 @@ def core_with_symbols() -> Path:
 
 
 def trace_packets(so: Path, x: int, y: int, packets: int, width: int, height: int,
-                  rays_per_packet: int) -> list[list[str]]:  # fmt: skip
-    """The instructions of `packets` packets from the one holding pixel (x, y), one list each."""
+                  rays_per_packet: int,
+                  filled: TileFilled | None = None) -> list[list[str]]:  # fmt: skip
+    """The instructions of `packets` packets from the one holding pixel (x, y), one list each
+    (`filled`: packet_index()'s)."""
     fn, store = store_offsets(so)
-    first = packet_index(x, y, width, height, rays_per_packet)
+    first = packet_index(x, y, width, height, rays_per_packet, filled)
     if first == 0:
         raise ModelError("the first packet has no store before it to stop at: pick another pixel")
     with tempfile.TemporaryDirectory() as tmp:
@@ -443,8 +458,16 @@ def main(argv: list[str] | None = None) -> int:
         # Loaded here as the traced process loads it, for its packet width.
         core_module = load_core(so)
         width, height = args.size
+        from reference.bench import ex25_scene
+        from tracer.render import to_core
+
+        core = to_core(ex25_scene(width, height))  # the traced process's scene
+
+        def filled(x0: int, y0: int, x1: int, y1: int) -> bool:
+            return bool(core_module.tile_filled(core, x0, y0, x1, y1))
+
         packets = trace_packets(so, *args.pixel, args.packets, width, height,
-                                core_module.rays_per_packet)  # fmt: skip
+                                core_module.rays_per_packet, filled)  # fmt: skip
         lines = [line for packet in packets for line in packet]
         mnemonics = Counter(line.split("\t", 1)[1].split()[0] for line in lines)
         arithmetic = sum(n for m, n in mnemonics.items() if VECTOR_ARITHMETIC.match(m))
@@ -465,7 +488,7 @@ def main(argv: list[str] | None = None) -> int:
                 f"  {cpu:<12} {m.per_iteration() / n:7.0f} cycles a packet, "
                 f"{m.instructions / m.cycles:.2f} instructions a cycle; held back by {held}"
             )
-    except ModelError as e:
+    except (ModelError, ValueError) as e:
         print(f"packet_model: {e}", file=sys.stderr)
         return 1
     return 0

@@ -40,6 +40,34 @@ def test_packet_index_counts_tiles_rows_and_packets() -> None:
     assert packet_index(164, 705, 1920, 1024, 4) == (44 * 120 + 10) * 64 + 4 + 1
 
 
+def test_packet_index_skips_the_tiles_filled_without_a_ray() -> None:
+    # Ex 25 at 1920x1024: the core fills the sky's tiles with the background (12_packet.h
+    # sky_only()), and they hold no packet. Here the first row of tiles, and one tile more.
+    def filled(x0: int, y0: int, x1: int, y1: int) -> bool:
+        assert (x1 - x0, y1 - y0) == (16, 16)
+        return y0 == 0 or (x0, y0) == (16, 16)
+
+    assert packet_index(0, 16, 1920, 1024, 8, filled) == 0
+    assert packet_index(32, 17, 1920, 1024, 8, filled) == 32 + 2
+    with pytest.raises(ValueError, match=r"pixel \(20, 20\) lies in a tile filled"):
+        packet_index(20, 20, 1920, 1024, 8, filled)
+
+
+def test_the_cores_filled_tiles_are_ex25s_sky() -> None:
+    """The core's answer that packet_model counts by: Ex 25's top left tile is sky, its bottom
+    left floor, and the tile holding the green sphere's top (over the horizon) is traced."""
+    from reference.bench import ex25_scene
+    from tracer import _core
+    from tracer.render import to_core
+
+    core = to_core(ex25_scene(1920, 1024))
+    assert _core.tile_filled(core, 0, 0, 16, 16)
+    assert not _core.tile_filled(core, 0, 1008, 16, 1024)
+    top = [y for y in range(0, 1024, 16) if not _core.tile_filled(core, 960, y, 976, y + 16)]
+    assert top[0] < 256  # the horizon's tiles begin at row 256; the sphere rises above it
+    assert sum(_core.tile_filled(core, 0, y, 16, y + 16) for y in range(0, 1024, 16)) == 16
+
+
 def test_packet_index_at_ragged_edges() -> None:
     # 20 x 12: tiles of 8 (its 2 tiles of 16 are fewer than 16), 3 across (8, 8, 4 wide), 2 down
     # (8, 4 high); one packet of 8 per tile row, the last tile's 4 wide.

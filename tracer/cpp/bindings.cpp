@@ -568,6 +568,17 @@ NB_MODULE(_core, m) {
         "meet the scene's plane number `plane` (12_packet.h plane_unseen()): a tile for which "
         "this holds of every plane, and whose pixels no sphere's rectangle reaches, is filled "
         "with the background without tracing a ray.");
+    m.def(
+        "tile_filled",
+        [](const rt::Scene &scene, int x0, int y0, int x1, int y1) {
+            if (!rt::packets_serve(scene) || scene.settings.spp != 1) return false;
+            const rt::PacketCulling culling(scene);
+            const rt::ImageSpan span = rt::pixel_centres(x0, x1, y0, y1);
+            return rt::sky_only(scene, rt::TileCulling(culling, span), span);
+        },
+        "scene"_a, "x0"_a, "y0"_a, "x1"_a, "y1"_a,
+        "Whether the packet tracer fills the tile of columns [x0, x1) and rows [y0, y1) with the "
+        "background without tracing a ray (12_packet.h sky_only(), one sample a pixel).");
 
     // Issue 11's study (study/): many rays at once through the scene's own closest_hit() and
     // any_hit(), the functions the renderer runs, so that what the study measures is what a
