@@ -260,7 +260,10 @@ def trace_packets(so: Path, x: int, y: int, packets: int, width: int, height: in
     """The instructions of `packets` packets from the one holding pixel (x, y), one list each
     (`filled`: packet_index()'s)."""
     fn, store = store_offsets(so)
-    first = packet_index(x, y, width, height, rays_per_packet, filled)
+    try:
+        first = packet_index(x, y, width, height, rays_per_packet, filled)
+    except ValueError as e:  # a pixel outside the image, or in a tile that holds no packet
+        raise ModelError(str(e)) from e
     if first == 0:
         raise ModelError("the first packet has no store before it to stop at: pick another pixel")
     with tempfile.TemporaryDirectory() as tmp:
@@ -488,7 +491,7 @@ def main(argv: list[str] | None = None) -> int:
                 f"  {cpu:<12} {m.per_iteration() / n:7.0f} cycles a packet, "
                 f"{m.instructions / m.cycles:.2f} instructions a cycle; held back by {held}"
             )
-    except (ModelError, ValueError) as e:
+    except ModelError as e:
         print(f"packet_model: {e}", file=sys.stderr)
         return 1
     return 0
