@@ -50,8 +50,44 @@ def _cpuinfo() -> dict[str, str]:
 _VECTOR_FLAG = ("sse", "ssse", "avx", "fma", "f16c", "amx")
 
 
+# Intel's family 6 models with AVX-512 and no AMX, by model number, as LLVM names their cores.
+_INTEL_AVX512 = {85: "skylake-avx512", 106: "icelake-server", 108: "icelake-server",
+                 125: "icelake-client", 126: "icelake-client", 140: "tigerlake",
+                 141: "tigerlake", 167: "rocketlake"}  # fmt: skip
+
+
+def cpu_core(info: dict[str, str]) -> str:
+    """The processor's core as LLVM names it (its -march / llvm-mca -mcpu value), from the
+    fields of /proc/cpuinfo; "" where they do not say. The flags come first: a hypervisor may
+    report another model's numbers. This machine class's Xeon reports family 6 model 167
+    (Rocket Lake) but has AMX and AVX512-FP16, which no Rocket Lake has, and 48 KiB of L1 data
+    cache and 2 MiB of L2 a core: a Sapphire Rapids or later Xeon (Golden Cove or Redwood Cove
+    cores; LLVM's scheduling model is one for all of them), whose 512-bit adds and multiplies
+    issue on two ports where Rocket Lake's issue on one."""
+    flags = set(info.get("flags", "").split())
+    try:
+        family, model = int(info["cpu family"]), int(info["model"])
+    except (KeyError, ValueError):
+        return ""
+    vendor = info.get("vendor_id", "")
+    if vendor == "GenuineIntel" and family == 6:
+        if "amx_tile" in flags:
+            return "sapphirerapids"
+        return _INTEL_AVX512.get(model, "") if "avx512f" in flags else ""
+    if vendor == "AuthenticAMD":
+        if family == 26:
+            return "znver5"
+        if family == 25:  # Zen 4: Genoa, Bergamo, Raphael, Phoenix; the rest Zen 3
+            zen4 = 0x10 <= model <= 0x1F or 0x60 <= model <= 0x7F or 0xA0 <= model <= 0xAF
+            return "znver4" if zen4 else "znver3"
+        if family == 23:
+            return "znver2" if model >= 0x30 else "znver1"
+    return ""
+
+
 def cpu() -> dict[str, Any]:
-    """The CPU the figures were measured on: its model, its vector-unit flags, its cores."""
+    """The CPU the figures were measured on: its model, its vector-unit flags, its cores, and
+    its core as LLVM names it (cpu_core())."""
     info = _cpuinfo()
     flags = sorted(f for f in info.get("flags", "").split() if f.startswith(_VECTOR_FLAG))
     model = info.get("model name") or platform.processor() or platform.machine()
@@ -60,7 +96,12 @@ def cpu() -> dict[str, Any]:
     numbers = [f"{k} {info[k]}" for k in ("cpu family", "model", "stepping") if k in info]
     if numbers:
         model += f" ({info.get('vendor_id', '')} {', '.join(numbers)})".replace("( ", "(")
-    return {"cpu_model": model, "cpu_flags": flags, "cpu_count": os.cpu_count()}
+    return {
+        "cpu_model": model,
+        "cpu_flags": flags,
+        "cpu_count": os.cpu_count(),
+        "cpu_core": cpu_core(info),
+    }
 
 
 def compiler() -> str:

@@ -11,8 +11,15 @@ through the next N packets, each from one pixel store to the next. The instructi
 in their order, branches pointed at one label, are then handed to LLVM's machine code analyser
 (``llvm-mca-19 -mcpu=NAME``), which times them on its model of that processor as if every
 branch were foreseen: cycles a packet, instructions a cycle, and the resources that hold it
-back. Its first use: why the Intel Xeon of this machine class (family 6, model 167: Rocket
-Lake) gives rtlab lower ratios than the Zen 4 (reference/speed-log.md). The model counts issue
+back. Its first use: why the Intel Xeon of this machine class gives rtlab lower ratios than the
+Zen 4 (reference/speed-log.md). That Xeon reports family 6, model 167 (Rocket Lake), but its
+flags (AMX, AVX512-FP16) and caches say Sapphire Rapids or later (reference.bench.cpu_core()):
+model it as ``sapphirerapids``: 389 cycles for a floor packet by that model, 582 by
+``rocketlake``'s (one port for 512-bit adds and multiplies, not two), against some 400 measured
+(Ex 25 without its spheres 21.2 ms, without any object 1.4 ms: 19.8 ms at 3.7 GHz over its
+181,920 floor packets). ``rocketlake``
+was the default until 2026-12-06, and the speed log's Xeon figures before then are its. The
+model counts issue
 ports and dependences, not the stack's traffic nor mispredictions: it says where a core's time
 goes, not which of two builds a few per cent apart is faster (the speed log has several it
 ranked wrongly, Clang 22 against Clang 19 on both machines among them). ``--where N`` also lists
@@ -442,7 +449,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--packets", type=int, default=4)
     parser.add_argument(
         "--cpu", action="append",
-        help="llvm-mca's -mcpu (default: znver4 and rocketlake, this machine class's two)",
+        help="llvm-mca's -mcpu (default: znver4 and sapphirerapids, this machine class's two)",
     )  # fmt: skip
     parser.add_argument("--size", type=int, nargs=2, default=(1920, 1024), metavar=("W", "H"))
     parser.add_argument(
@@ -483,7 +490,7 @@ def main(argv: list[str] | None = None) -> int:
             print(where_time_goes(lines, source_places(so, offsets), args.where, source_text))
         if args.mnemonics > 0:
             print(mnemonic_mix(lines, n, args.mnemonics))
-        for cpu in args.cpu or ["znver4", "rocketlake"]:
+        for cpu in args.cpu or ["znver4", "sapphirerapids"]:
             m = model(trace_to_asm(lines), cpu)
             held = ", ".join(f"{r} {p:.0f}%" for r, p in
                              sorted(m.bottlenecks.items(), key=lambda kv: -kv[1])[:3])  # fmt: skip

@@ -233,6 +233,23 @@ def test_bench_rows_name_the_cpu_and_its_vector_units():
     assert "sse2" in info["cpu_flags"] and "fpu" not in info["cpu_flags"]
 
 
+def test_cpu_core_reads_the_flags_before_the_model_numbers():
+    """The Xeon of this machine class reports Rocket Lake's numbers (family 6, model 167) with
+    AMX, which only Sapphire Rapids and later Xeons have: its core is named by the flags."""
+    from reference.bench import cpu_core
+
+    intel = {"vendor_id": "GenuineIntel", "cpu family": "6", "model": "167"}
+    assert cpu_core({**intel, "flags": "sse2 avx512f amx_tile avx512_fp16"}) == "sapphirerapids"
+    assert cpu_core({**intel, "flags": "sse2 avx2 avx512f"}) == "rocketlake"
+    assert cpu_core({**intel, "flags": "sse2 avx2"}) == ""  # no AVX-512: not one we name
+    amd = {"vendor_id": "AuthenticAMD", "cpu family": "25", "flags": "avx512f"}
+    assert cpu_core({**amd, "model": "17"}) == "znver4"  # EPYC Genoa, this class's Zen 4
+    assert cpu_core({**amd, "model": "1"}) == "znver3"  # EPYC Milan
+    assert cpu_core({**amd, "cpu family": "26", "model": "2"}) == "znver5"
+    assert cpu_core({"vendor_id": "GenuineIntel", "flags": "sse2"}) == ""  # no numbers
+    assert cpu_core({}) == ""
+
+
 def test_bench_json_through_the_cli(tmp_path, capsys, monkeypatch):
     """`rtlab bench classic --json FILE` through main(), the suite made small (one repeat, one
     thread, 64x32): the JSON file holds the rows with the contract's fields, and the ratios
@@ -263,7 +280,7 @@ def test_bench_json_through_the_cli(tmp_path, capsys, monkeypatch):
         assert r["metric"] == "seconds" and r["unit"] == "s", r
         assert isinstance(r["value"], float) and r["value"] > 0, r
         assert r["suite"] == "classic" and r["machine"], r
-        assert r["cpu_model"] and "sse2" in r["cpu_flags"], r
+        assert r["cpu_model"] and "sse2" in r["cpu_flags"] and "cpu_core" in r, r
         assert r["compiler"] == built, r
     assert [p.name for p in js.parent.iterdir()] == ["bench.json"]  # no temporary file left
 
