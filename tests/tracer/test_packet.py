@@ -10,6 +10,8 @@ the two tracers and not the one-ray code with itself."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -82,6 +84,33 @@ def test_power_of_a_packet_is_each_lanes_one_ray_power():
                 lanes = _core.power_lanes(x, n)
                 one = [_core.power(xi, ni) for xi, ni in zip(x, n, strict=True)]
                 assert [v.hex() for v in lanes] == [v.hex() for v in one], (x, n)
+
+
+def test_power_of_a_shared_whole_exponent_is_each_lanes_one_ray_power():
+    """Where a packet's rays met one material whose shininess is whole, the packet tracer takes
+    x^n by power_whole(), squaring by the bits of a plain integer, in place of power(); each
+    lane must get the one-ray power()'s bits (the float image rarely shows one double ulp, so
+    this compares the powers themselves), for every whole exponent and bases from 1 down to
+    where x^n is flushed to 0 (below 2^-1022). The lanes without a highlight, whose bases may
+    be 0 or negative, are computed too but not taken: only that they are finite is asked."""
+    import random
+
+    rng = random.Random(12)
+    width = _core.rays_per_packet
+    flushed = between = 0
+    for n in range(1, 1025):
+        for _ in range(2):
+            x = [rng.choice([rng.random(), 1 - rng.random() * 1e-6, 1.0, 0.5**rng.uniform(0, 3)])
+                 for _ in range(width)]  # fmt: skip
+            lanes = _core.power_whole_lanes(x, n)
+            one = [_core.power(xi, float(n)) for xi in x]
+            assert [v.hex() for v in lanes] == [v.hex() for v in one], (x, n)
+            flushed += sum(v == 0.0 for v in one)
+            between += sum(0.0 < v < 1.0 for v in one)
+    assert flushed > 100 and between > 1000  # both ends were reached
+    assert all(math.isfinite(v) for v in _core.power_whole_lanes([0.0, -0.5] * (width // 2), 61))
+    with pytest.raises(ValueError, match="1 to 1024"):
+        _core.power_whole_lanes([0.5] * width, 1025)
 
 
 def test_leaving_origins_are_each_lanes_offset_ray_origin():

@@ -845,8 +845,12 @@ inline Mask in_shadow(const Scene &scene, const ShadowRayL &shadow, Mask active,
     ColorL m_color;
     Lanes ambient, diffuse, specular, shininess, reflectivity;
     const bool shared = !any(active & (hit.material != hit.material[first]));
+    int whole_shininess = 0; // a shared material's shininess where it is whole (power_whole())
     if (shared) {
         const Material &m = scene.materials[size_t(hit.material[first])];
+        if (m.shininess >= 1 && m.shininess <= max_whole_exponent &&
+            m.shininess == double(int(m.shininess)))
+            whole_shininess = int(m.shininess);
         m_color = splat(m.color);
         ambient = splat(m.ambient), diffuse = splat(m.diffuse), specular = splat(m.specular);
         shininess = splat(m.shininess), reflectivity = splat(m.reflectivity);
@@ -901,8 +905,13 @@ inline Mask in_shadow(const Scene &scene, const ShadowRayL &shadow, Mask active,
             Lanes cos_alpha = dot(R, L);
             highlight &= cos_alpha > 0;
             if (any(highlight)) {
-                const Lanes n = select(highlight, shininess, splat(1.0));
-                add_where(highlight, local, lc * (specular * power(cos_alpha, n)));
+                // Where the rays met one material whose shininess is whole, every lane takes
+                // it as its exponent, those without a highlight too (their results are not
+                // taken), and power_whole() squares by a plain integer's bits.
+                const Lanes x_n = whole_shininess > 0
+                                      ? power_whole(cos_alpha, whole_shininess)
+                                      : power(cos_alpha, select(highlight, shininess, splat(1.0)));
+                add_where(highlight, local, lc * (specular * x_n));
             }
         }
     }

@@ -524,6 +524,21 @@ NB_MODULE(_core, m) {
         },
         "x"_a, "n"_a,
         "power() for a packet's 8 lanes at once, as the packet tracer computes it (12_packet.h).");
+    m.def(
+        "power_whole_lanes",
+        [](std::array<double, rt::rays_per_packet> x, int n) {
+            if (n < 1 || n > int(rt::max_whole_exponent))
+                throw nb::value_error("n: expected a whole exponent from 1 to 1024");
+            rt::Lanes xl;
+            for (int k = 0; k < rt::rays_per_packet; ++k) xl[k] = x[size_t(k)];
+            const rt::Lanes r = rt::power_whole(xl, n);
+            std::array<double, rt::rays_per_packet> out;
+            for (int k = 0; k < rt::rays_per_packet; ++k) out[size_t(k)] = r[k];
+            return out;
+        },
+        "x"_a, "n"_a,
+        "power_whole() for a packet's lanes, which share the whole exponent n (power.h): what the "
+        "packet tracer computes for a material's whole shininess.");
 
     m.def(
         "leaving_origins",
