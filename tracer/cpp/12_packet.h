@@ -525,11 +525,12 @@ inline Mask select(Mask m, Mask a, Mask b) { return m ? a : b; }
 // Whether `skip` holds every sphere of the scene. closest_hit() and any_hit() then leave out
 // the spheres' set-up too: 1/(d.d), a division of eight lanes that no test takes. Nearly all of
 // Ex 25's sky and floor packets skip every sphere at their first level, the floor's shadow rays
-// and reflections too: four of a floor packet's eight divisions. On the Intel Xeon (Rocket
-// Lake) a 512-bit division holds the divider 16 cycles: Ex 25 1.049x [1.019-1.083] on one
-// thread and 1.073x [1.061-1.096] on two (7 rounds, the same bits; reference/speed-log.md). On
-// the Zen 4, whose divider is faster, the same change measured 0.984x in an older state of
-// this code (within what a change's register allocation moves there).
+// and reflections too: four of a floor packet's eight divisions. On the Intel Xeon (a Sapphire
+// Rapids-class core that reports Rocket Lake's model number) a 512-bit division holds the
+// divider 16 cycles: Ex 25 1.049x [1.019-1.083] on one thread and 1.073x [1.061-1.096] on two
+// (7 rounds, the same bits; reference/speed-log.md). On the Zen 4, whose divider is faster, the
+// same change measured 0.984x in an older state of this code (within what a change's register
+// allocation moves there).
 inline bool every_sphere(const Scene &scene, unsigned skip) {
     const size_t n = scene.spheres.size();
     if (n > size_t(max_culled)) return false;
