@@ -24,7 +24,26 @@ from reference.build_ab import (
     summarize,
     workers,
 )
-from reference.core_build import ROOT, make_cxx
+from reference.core_build import ROOT, make_cxx, source_warnings
+
+
+def test_a_builds_warnings_are_those_about_rtlab() -> None:
+    """Ninja's output of a build: a warning in rtlab's sources and one about its options are
+    kept; nanobind's, and Clang's note on the Xeon's CPU features (printed once a compiled file,
+    a hundred lines a build there), are not."""
+    output = "\n".join([
+        "[1/3] Building CXX object CMakeFiles/_core.dir/tracer/cpp/bindings.cpp.o",
+        "/w/tracer/cpp/12_packet.h:12:5: warning: unused variable 'x' [-Wunused-variable]",
+        "clang++-19: warning: argument unused during compilation: '-mfoo'",
+        "/w/.venv/lib/nanobind/src/nb_func.cpp:3:1: warning: something [-Wshadow]",
+        "warning: invalid feature combination: +avx10.1-256; will be promoted to avx10.1-512"
+        " [-Winvalid-feature-combination]",
+        "[3/3] Linking CXX shared module _core.cpython-311-x86_64-linux-gnu.so",
+    ])  # fmt: skip
+    assert source_warnings(output) == (
+        "/w/tracer/cpp/12_packet.h:12:5: warning: unused variable 'x' [-Wunused-variable]",
+        "clang++-19: warning: argument unused during compilation: '-mfoo'",
+    )
 
 
 def test_a_spec_is_a_name_then_keys_with_shell_quoting() -> None:
