@@ -849,9 +849,7 @@ inline Mask in_shadow(const Scene &scene, const ShadowRayL &shadow, Mask active,
     int whole_shininess = 0; // a shared material's shininess where it is whole (power_whole())
     if (shared) {
         const Material &m = scene.materials[size_t(hit.material[first])];
-        if (m.shininess >= 1 && m.shininess <= max_whole_exponent &&
-            m.shininess == double(int(m.shininess)))
-            whole_shininess = int(m.shininess);
+        whole_shininess = whole_exponent(m.shininess);
         m_color = splat(m.color);
         ambient = splat(m.ambient), diffuse = splat(m.diffuse), specular = splat(m.specular);
         shininess = splat(m.shininess), reflectivity = splat(m.reflectivity);

@@ -89,6 +89,10 @@ inline bool all_lanes(Mask m) {
 // largest n asks for. x <= 1, so every factor of x^n is at least x^n: where x^n is a normal
 // double nothing underflowed on the way, and below 2^-1022 it is flushed to 0 as below.
 constexpr double max_whole_exponent = 1024;
+// A product below 2^-1022 flushed to 0, as every route of power() flushes it.
+template <class T> inline T flush_tiny(T product) {
+    return select(product < 0x1p-1022, T{} + 0.0, product);
+}
 template <class T> inline T power_by_squaring(T x, T n) {
     using I = decltype(bits(x));
     I k;
@@ -103,7 +107,13 @@ template <class T> inline T power_by_squaring(T x, T n) {
         product = select((k & 1) != 0, product * square, product);
         square = square * square;
     }
-    return select(product < 0x1p-1022, T{} + 0.0, product);
+    return flush_tiny(product);
+}
+
+// n as power_by_squaring() takes it where it is a whole number from 1 to max_whole_exponent
+// (power()'s test, for one exponent), else 0.
+inline int whole_exponent(double n) {
+    return n >= 1 && n <= max_whole_exponent && n == double(int(n)) ? int(n) : 0;
 }
 
 // power_by_squaring() for an exponent that every lane shares, given as a plain integer n (1 to
@@ -122,7 +132,7 @@ template <class T> inline T power_whole(T x, int n) {
         if (n == 0) break;
         square = square * square;
     }
-    return select(product < 0x1p-1022, T{} + 0.0, product);
+    return flush_tiny(product);
 }
 
 template <class T> inline T power(T x, T n) {
