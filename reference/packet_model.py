@@ -209,8 +209,14 @@ def packet_store(listing: str, source_line: Callable[[int], str]) -> int | None:
     floats: the first conversion of the widest vectors the build has whose source line
     (`source_line(address)`, from the core's line tables) is store_pixels()'s
     __builtin_convertvector() of a packet's colour. (The compiler may interleave the three
-    with other work, and it converts vectors elsewhere too: a sample's sum, a short packet.)"""
-    found = re.findall(r"^\s*([0-9a-f]+):\s+vcvtpd2ps\s+%([xyz])mm", listing, re.M)
+    with other work, and it converts vectors elsewhere too: a sample's sum, a short packet. It
+    may also read the colour from the stack, `vcvtpd2ps 0x540(%rsp),%ymm0`: then the width is
+    the destination's one size up, or objdump's x/y suffix names it.)"""
+    found = []
+    pattern = r"^\s*([0-9a-f]+):\s+vcvtpd2ps([xy]?)\s+(%([xyz])mm\d+|[^,\s]*\([^)]*\)),%([xyz])mm"
+    for address, suffix, _, source, destination in re.findall(pattern, listing, re.M):
+        width = source or suffix or {"y": "z", "x": "y"}.get(destination, "x")
+        found.append((address, width))
     for width in "zyx":
         for address in (int(a, 16) for a, w in found if w == width):
             if "__builtin_convertvector(c." in source_line(address):

@@ -162,6 +162,13 @@ def test_packet_store_is_store_pixels_conversion_of_the_widest_vectors() -> None
     assert packet_store(LISTING.replace("%zmm", "%ymm"), SOURCE.__getitem__) == 0x268D0
     # Without line tables (every source line unknown) there is none to stop at.
     assert packet_store(LISTING, lambda address: "") is None
+    # The colour read from the stack (a core of 2026-12-06): a 512-bit source, by its
+    # destination; objdump's suffix names the width of a memory source into an xmm register.
+    spilled = LISTING.replace("vcvtpd2ps %zmm7,%ymm0", "vcvtpd2ps 0x540(%rsp),%ymm0")
+    assert packet_store(spilled, SOURCE.__getitem__) == 0x268D0
+    narrow = LISTING.replace("vcvtpd2ps %zmm7,%ymm0", "vcvtpd2psy 0x540(%rsp),%xmm0")
+    narrow = narrow.replace("%zmm", "%ymm")
+    assert packet_store(narrow, SOURCE.__getitem__) == 0x268D0
 
 
 # addr2line -a -f -i -C on two instructions of a Clang 19 RelWithDebInfo core (argument lists

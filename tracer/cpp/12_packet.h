@@ -93,6 +93,49 @@ inline Mask first_lanes(int n) {
     return lane < n;
 }
 inline bool any(Mask m) { return lane_bits(m) != 0; }
+
+// Which lanes of a packet a condition holds in, as the packet tracer keeps it between its steps.
+// Comparing two Lanes gives a Mask, a 64-bit integer a lane (all ones where true). With
+// AVX-512 a comparison writes one bit a lane into a mask register instead, which the blends
+// (select()) and the tests (any()) read as it is; but Clang keeps a Mask there only within one
+// block of straight code. The packet tracer branches at every any(), and at each branch a Mask
+// still needed went back into a vector register (a zeroing move) and came out of it again after
+// (vptestmq): some 50 of the 650 operations a floor packet of Ex 25 issues on ports 0 and 5,
+// the ports that bound it on the Intel Xeon, and a vector register held for each mask live
+// across the loops over objects and lights. A vector of bools, Clang's type for one bit a lane,
+// stays in a mask register from block to block: Ex 25 1.063x [1.054-1.074] on one thread of the
+// Xeon and 1.058x on two (9 alternating rounds, the same bits; a floor packet 1,288 instructions
+// to 1,224). GCC has no such type, and a machine without AVX-512 no mask registers: there a
+// LaneMask holds the Mask, as before. (Issue 12.)
+struct LaneMask {
+#if defined(__clang__) && defined(__AVX512F__)
+    typedef bool Bits __attribute__((ext_vector_type(rays_per_packet)));
+    Bits bits;
+    explicit LaneMask(Bits b) : bits(b) {}
+    LaneMask(Mask m) : bits(__builtin_convertvector(m != 0, Bits)) {}
+    // As a Mask: all ones where true (a bool converts to 1).
+    Mask mask() const { return Mask{} - __builtin_convertvector(bits, Mask); }
+    unsigned lanes() const { return __builtin_bit_cast(uint8_t, bits); }
+#else
+    typedef Mask Bits;
+    Bits bits;
+    LaneMask(Mask m) : bits(m) {}
+    Mask mask() const { return bits; }
+    unsigned lanes() const { return lane_bits(bits); }
+#endif
+    LaneMask() = default;
+    LaneMask operator&(LaneMask m) const { return LaneMask(Bits(bits & m.bits)); }
+    LaneMask operator|(LaneMask m) const { return LaneMask(Bits(bits | m.bits)); }
+    LaneMask operator~() const { return LaneMask(Bits(~bits)); }
+    LaneMask &operator&=(LaneMask m) { return *this = *this & m; }
+    LaneMask &operator|=(LaneMask m) { return *this = *this | m; }
+};
+inline LaneMask operator&(const Mask &a, LaneMask b) { return LaneMask(a) & b; }
+inline unsigned lane_bits(LaneMask m) { return m.lanes(); }
+inline int count(LaneMask m) { return __builtin_popcount(m.lanes()); }
+inline bool any(LaneMask m) { return m.lanes() != 0; }
+inline Lanes select(LaneMask m, Lanes a, Lanes b) { return m.mask() ? a : b; }
+
 // Each lane's correctly rounded square root, as std::sqrt gives it. Written as a loop over the
 // lanes, GCC vectorised it at its preferred width, 256 bits on Intel even with AVX-512: two
 // vsqrtpd on ymm halves stored to the stack and read back as one zmm, a load that cannot be
@@ -146,7 +189,7 @@ inline Vec3L splat(const Vec3 &v) { return {splat(v.x), splat(v.y), splat(v.z)};
 inline Lanes dot(const Vec3L &a, const Vec3L &b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 inline Vec3L normalize(const Vec3L &v) { return v / sqrt(dot(v, v)); }
 inline Vec3L abs(const Vec3L &v) { return {fabs(v.x), fabs(v.y), fabs(v.z)}; }
-inline Vec3L select(Mask m, const Vec3L &a, const Vec3L &b) {
+inline Vec3L select(LaneMask m, const Vec3L &a, const Vec3L &b) {
     return {select(m, a.x, b.x), select(m, a.y, b.y), select(m, a.z, b.z)};
 }
 
@@ -159,7 +202,7 @@ inline ColorL operator*(const ColorL &a, const ColorL &c) {
 }
 inline ColorL splat(const Color &c) { return {splat(c.r), splat(c.g), splat(c.b)}; }
 // color += m ? add : 0, as `color += add` only in the lanes of m.
-inline void add_where(Mask m, ColorL &color, const ColorL &add) {
+inline void add_where(LaneMask m, ColorL &color, const ColorL &add) {
     color.r = select(m, color.r + add.r, color.r);
     color.g = select(m, color.g + add.g, color.g);
     color.b = select(m, color.b + add.b, color.b);
@@ -173,7 +216,7 @@ struct RayL {
 // miss most spheres: when no live lane has a real root ahead, the roots' two divisions and the
 // square root are skipped (they cost more than all the rest).
 inline Lanes sphere_t(const Sphere &s, const RayL &ray, Lanes a, Lanes inv_a, Lanes max,
-                      Mask active) {
+                      LaneMask active) {
     // BEGIN SOLUTION L13
     // PROMPT: The packet tracer's copy of 05_sphere.h sphere_t() with the robust quadratic, one ray
     // PROMPT: per lane: not part of the exercise, hidden until lessons L02 and L13 are done (the
@@ -183,14 +226,14 @@ inline Lanes sphere_t(const Sphere &s, const RayL &ray, Lanes a, Lanes inv_a, La
     Lanes b = dot(f, ray.d);
     double r2 = s.radius * s.radius;
     Lanes c0 = dot(f, f) - r2;
-    Mask away = (c0 > 0) & (b > 0);
+    LaneMask away = (c0 > 0) & (b > 0);
     if (!any(active & ~away)) return inf;
     Vec3L l = f - ray.d * (b * inv_a);
     Lanes D = a * (r2 - dot(l, l));
     if (!any(active & ~away & (D >= 0))) return inf;
     Lanes q = -(b + copysign(sqrt(D), b));
     Lanes t0 = c0 / q, t1 = q * inv_a;
-    Mask swap = t0 > t1;
+    LaneMask swap = t0 > t1;
     Lanes lo = select(swap, t1, t0), hi = select(swap, t0, t1);
     Lanes t = select((lo > 0) & (lo < max), lo, select((hi > 0) & (hi < max), hi, inf));
     return select(away | (D < 0) | (q == 0), inf, t);
@@ -521,6 +564,7 @@ struct ClosestL {
 };
 
 inline Mask select(Mask m, Mask a, Mask b) { return m ? a : b; }
+inline Mask select(LaneMask m, Mask a, Mask b) { return m.mask() ? a : b; }
 
 // Whether `skip` holds every sphere of the scene. closest_hit() and any_hit() then leave out
 // the spheres' set-up too: 1/(d.d), a division of eight lanes that no test takes. Nearly all of
@@ -541,7 +585,7 @@ inline bool every_sphere(const Scene &scene, unsigned skip) {
 // `skip`: bit i set where no ray of the packet can meet sphere i (i < 32; primary rays outside
 // its image rectangle, render_tile_packets()): its test, which would find nothing, is left out
 // (and counted all the same).
-inline ClosestL closest_hit(const Scene &scene, const RayL &ray, Mask active, RayCounts &counts,
+inline ClosestL closest_hit(const Scene &scene, const RayL &ray, LaneMask active, RayCounts &counts,
                             unsigned skip) {
     ClosestL c{splat(infinity), Mask{} - 1};
     counts.primitive_tests +=
@@ -551,7 +595,7 @@ inline ClosestL closest_hit(const Scene &scene, const RayL &ray, Mask active, Ra
         for (size_t i = 0; i < scene.spheres.size(); ++i) {
             if (i < max_culled && (skip >> i & 1)) continue;
             Lanes t = sphere_t(scene.spheres[i], ray, a, inv_a, c.t, active);
-            Mask closer = active & (t < c.t);
+            LaneMask closer = active & (t < c.t);
             if (!any(closer)) continue;
             c.t = select(closer, t, c.t);
             c.id = select(closer, Mask{} + int64_t(i), c.id);
@@ -561,7 +605,7 @@ inline ClosestL closest_hit(const Scene &scene, const RayL &ray, Mask active, Ra
     for (size_t i = 0; i < scene.planes.size(); ++i, ++id) {
         if (!any(active & may_be_ahead(scene.planes[i], ray))) continue;
         Lanes t = plane_t(scene.planes[i], ray);
-        Mask closer = active & (t > 0) & (t < c.t);
+        LaneMask closer = active & (t > 0) & (t < c.t);
         if (!any(closer)) continue;
         c.t = select(closer, t, c.t);
         c.id = select(closer, Mask{} + id, c.id);
@@ -581,9 +625,9 @@ inline ClosestL closest_hit(const Scene &scene, const RayL &ray, Mask active, Ra
 // `skip`: as closest_hit()'s: the spheres that cannot shadow the points of the spheres the
 // packet met, or for primary rays that all met a plane, the spheres whose shadow on it none of
 // the packet's pixels sees (PacketCulling, PrimaryPixels).
-inline Mask any_hit(const Scene &scene, const RayL &ray, Lanes max, Mask active,
+inline LaneMask any_hit(const Scene &scene, const RayL &ray, Lanes max, LaneMask active,
                     RayCounts &counts, unsigned skip = 0) {
-    Mask blocked = mask_all(false);
+    LaneMask blocked = mask_all(false);
     if (every_sphere(scene, skip)) { // counted all the same, as a test that found nothing
         counts.primitive_tests += uint64_t(count(active)) * scene.spheres.size();
     } else {
@@ -640,11 +684,11 @@ struct HitL {
     bool others_met = false;  // some lane met a plane, or a sphere after those
 };
 
-inline Vec3L select(Mask m, const Vec3 &a, const Vec3L &b) {
+inline Vec3L select(LaneMask m, const Vec3 &a, const Vec3L &b) {
     return {select(m, splat(a.x), b.x), select(m, splat(a.y), b.y), select(m, splat(a.z), b.z)};
 }
 
-inline HitL hit_record(const Scene &scene, const RayL &ray, const ClosestL &c, Mask active) {
+inline HitL hit_record(const Scene &scene, const RayL &ray, const ClosestL &c, LaneMask active) {
     // Each lane's object, by one select per object some lane hit: sphere centre and radius, or
     // plane point and normal.
     // 1/radius is selected too, a scalar division a sphere: sphere_hit()'s N = local / radius
@@ -652,12 +696,12 @@ inline HitL hit_record(const Scene &scene, const RayL &ray, const ClosestL &c, M
     // division fewer (Ex 25 1.015x and 1.020x on the Xeon's one and two threads, 7 rounds).
     Vec3L centre = {}, normal = {};
     Lanes radius = splat(1.0), inv_radius = splat(1.0);
-    Mask is_sphere = mask_all(false);
+    LaneMask is_sphere = mask_all(false);
     HitL h;
     h.material = Mask{};
     int64_t id = 0;
     for (const Sphere &s : scene.spheres) {
-        const Mask here = active & (c.id == id++);
+        const LaneMask here = active & (c.id == id++);
         if (!any(here)) continue;
         if (id - 1 < max_culled) h.spheres_met |= 1u << (id - 1);
         else h.others_met = true;
@@ -668,7 +712,7 @@ inline HitL hit_record(const Scene &scene, const RayL &ray, const ClosestL &c, M
         h.material = select(here, Mask{} + s.material, h.material);
     }
     for (const Plane &pl : scene.planes) {
-        const Mask here = active & (c.id == id++);
+        const LaneMask here = active & (c.id == id++);
         if (!any(here)) continue;
         h.others_met = true;
         centre = select(here, pl.point, centre);
@@ -680,7 +724,7 @@ inline HitL hit_record(const Scene &scene, const RayL &ray, const ClosestL &c, M
     if (spheres) { // project onto the sphere
         Vec3L local = at - centre;
         Lanes len = sqrt(dot(local, local));
-        const Mask degenerate = active & is_sphere & ~(len > 0); // as sphere_hit()
+        const LaneMask degenerate = active & is_sphere & ~(len > 0); // as sphere_hit()
         if (any(degenerate)) {
             local = select(degenerate, -ray.d, local);
             len = select(degenerate, sqrt(dot(local, local)), len);
@@ -745,14 +789,14 @@ inline Vec3L away_origin(const Vec3L &p, const Vec3L &p_error, const Vec3L &Ng) 
 }
 
 inline Vec3L leaving_origin(const Vec3L &p, const Vec3L &p_error, const Vec3L &Ng,
-                            const Vec3L &away, const Vec3L &toward, Mask lanes) {
-    const Mask back = dot(toward, Ng) < 0;
+                            const Vec3L &away, const Vec3L &toward, LaneMask lanes) {
+    const LaneMask back = dot(toward, Ng) < 0;
     if (!any(back & lanes)) return away;
     return select(back, offset_ray_origin(p, p_error, Ng, toward), away);
 }
 
 inline RayL secondary_ray(const HitL &hit, const Vec3L &Ng, const Vec3L &away,
-                          const Vec3L &direction, Mask lanes) {
+                          const Vec3L &direction, LaneMask lanes) {
     return {leaving_origin(hit.p, hit.p_error, Ng, away, direction, lanes), direction};
 }
 
@@ -762,7 +806,7 @@ struct ShadowRayL {
 };
 
 inline ShadowRayL shadow_ray_to(const HitL &hit, const Vec3L &Ng, const Vec3L &away,
-                                const Vec3 &point, Mask lanes) {
+                                const Vec3 &point, LaneMask lanes) {
     // BEGIN SOLUTION L05
     // PROMPT: The packet tracer's copy of 04_hit.h shadow_ray_to(), one ray per lane: not part of
     // PROMPT: the exercise, hidden until lesson L05 is done (the lessons use the one-ray tracer).
@@ -773,7 +817,7 @@ inline ShadowRayL shadow_ray_to(const HitL &hit, const Vec3L &Ng, const Vec3L &a
 }
 
 inline ShadowRayL shadow_ray_towards(const HitL &hit, const Vec3L &Ng, const Vec3L &away,
-                                     const Vec3 &direction, Mask lanes) {
+                                     const Vec3 &direction, LaneMask lanes) {
     // BEGIN SOLUTION L05
     // PROMPT: The packet tracer's copy of 04_hit.h shadow_ray_towards(), one ray per lane: not part
     // PROMPT: of the exercise, hidden until lesson L05 is done (the lessons use the one-ray
@@ -784,7 +828,7 @@ inline ShadowRayL shadow_ray_towards(const HitL &hit, const Vec3L &Ng, const Vec
 }
 
 inline ShadowRayL shadow_ray(const HitL &hit, const Vec3L &Ng, const Vec3L &away,
-                             const Light &light, Mask lanes) {
+                             const Light &light, LaneMask lanes) {
     // BEGIN SOLUTION L05
     // PROMPT: The packet tracer's copy of 10_classic.h shadow_ray(), one ray per lane: not part of
     // PROMPT: the exercise, hidden until lesson L05 is done (the lessons use the one-ray tracer).
@@ -795,7 +839,7 @@ inline ShadowRayL shadow_ray(const HitL &hit, const Vec3L &Ng, const Vec3L &away
 }
 
 // The lanes of `active` whose shadow ray is blocked. `skip`: as any_hit()'s.
-inline Mask in_shadow(const Scene &scene, const ShadowRayL &shadow, Mask active,
+inline LaneMask in_shadow(const Scene &scene, const ShadowRayL &shadow, LaneMask active,
                       RayCounts &counts, unsigned skip = 0) {
     // BEGIN SOLUTION L05
     // PROMPT: The packet tracer's copy of 10_classic.h in_shadow(), one ray per lane: not part of
@@ -817,7 +861,7 @@ inline Mask in_shadow(const Scene &scene, const ShadowRayL &shadow, Mask active,
 // reloaded the packet's ray, coefficient and colour at every level (a frame of 3.5 KB), and
 // its entry and return held 5% of Ex 25's time (perf); inlined, Ex 25 1.036x on one thread and
 // 1.034x on two (Zen 4, five alternating rounds, the same bits).
-[[gnu::always_inline]] inline Mask trace_level(const Scene &scene, RayL &ray, Mask active,
+[[gnu::always_inline]] inline LaneMask trace_level(const Scene &scene, RayL &ray, LaneMask active,
                                                Lanes &coef, ColorL &color, RayCounts &counts,
                                                unsigned skip, const PacketCulling *culling,
                                                const PrimaryPixels *primary,
@@ -828,7 +872,7 @@ inline Mask in_shadow(const Scene &scene, const ShadowRayL &shadow, Mask active,
     // PROMPT: exercise, hidden until lesson L07 is done (the lessons use the one-ray tracer).
     const Settings &s = scene.settings;
     ClosestL closest = closest_hit(scene, ray, active, counts, skip);
-    Mask found = active & (closest.t != infinity);
+    LaneMask found = active & (closest.t != infinity);
     add_where(active & ~found, color, splat(s.background) * coef);
     active = found;
     reflected = 0;
@@ -868,7 +912,7 @@ inline Mask in_shadow(const Scene &scene, const ShadowRayL &shadow, Mask active,
 
     // local_color()
     ColorL local = m_color * (splat(s.ambient_light) * ambient);
-    Mask shaded = active & ~((diffuse == 0) & (specular == 0));
+    LaneMask shaded = active & ~((diffuse == 0) & (specular == 0));
     for (size_t l = 0; l < scene.lights.size(); ++l) {
         const Light &light = scene.lights[l];
         if (!any(shaded)) break;
@@ -876,7 +920,7 @@ inline Mask in_shadow(const Scene &scene, const ShadowRayL &shadow, Mask active,
         if (light.type == Light::Type::directional) L = splat(-light.direction);
         else L = normalize(splat(light.position) - hit.p);
         Lanes NL = dot(N, L);
-        Mask lit = shaded & (NL > 0);
+        LaneMask lit = shaded & (NL > 0);
         if (!any(lit)) continue;
         unsigned cannot_block = 0;
         if (culling != nullptr && int(l) < culling->lights) {
@@ -888,7 +932,7 @@ inline Mask in_shadow(const Scene &scene, const ShadowRayL &shadow, Mask active,
         if (!any(lit)) continue;
         const ColorL lc = splat(light.color);
         add_where(lit, local, (m_color * lc) * (diffuse * NL));
-        Mask highlight = lit & (specular != 0);
+        LaneMask highlight = lit & (specular != 0);
         if (any(highlight)) {
             // Where R.L <= 0 the one-ray code adds (specular 0) light.color, +0 to a sum of
             // products of finite non-negative numbers (the scene reader takes finite values
@@ -938,7 +982,7 @@ namespace rt {
 // stack and its colour back by memory, and the loop's state was saved and restored around it;
 // inlined, Ex 25 1.059x on one thread and 1.061x on two (Zen 4, five alternating rounds, the
 // same bits), and the extension no larger.
-[[gnu::always_inline]] inline ColorL trace(const Scene &scene, RayL ray, Mask active,
+[[gnu::always_inline]] inline ColorL trace(const Scene &scene, RayL ray, LaneMask active,
                                            RayCounts &counts, const PacketCulling *culling,
                                            const PrimaryPixels *primary) {
     // BEGIN SOLUTION L07
@@ -1104,7 +1148,7 @@ inline void render_tile_packets(const PacketCulling &culling, const Scene &scene
                 row[p] = primary_rays(cam, across[p], j);
             for (int p = 0, i = x0; i < x1; ++p, i += rays_per_packet) {
                 const int n = std::min(rays_per_packet, x1 - i);
-                const Mask active = first_lanes(n);
+                const LaneMask active = first_lanes(n);
                 counts.primary += uint64_t(n);
                 const PrimaryPixels pixels{tile, pixel_centres(i, i + n, j, j + 1)};
                 const RayL rays = p < most ? row[p] : primary_rays(cam, i, j); // a wider tile
@@ -1123,7 +1167,7 @@ inline void render_tile_packets(const PacketCulling &culling, const Scene &scene
     int pixel[rays_per_packet], n = 0;
     ImageSpan span{};
     auto flush = [&] {
-        const Mask active = first_lanes(n);
+        const LaneMask active = first_lanes(n);
         for (int k = n; k < rays_per_packet; ++k) // idle lanes: any harmless ray, masked off
             packet.o.x[k] = packet.o.y[k] = packet.o.z[k] = 0,
             packet.d.x[k] = packet.d.y[k] = 0, packet.d.z[k] = 1;
