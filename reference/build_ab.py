@@ -428,6 +428,8 @@ def run_rounds(pool: list[Worker], cases: list[str], threads: list[int], rounds:
                log: Callable[[str], None] = print) -> list[Cell]:  # fmt: skip
     """The alternating rounds. After the first, the outputs are compared, and unless
     `allow_different` a difference stops the run before more time is spent."""
+    from tracer import interrupt  # not at the top: a worker loads its core before tracer
+
     names = [w.variant.name for w in pool]
     by_name = {w.variant.name: w for w in pool}
     cells = [
@@ -438,6 +440,9 @@ def run_rounds(pool: list[Worker], cases: list[str], threads: list[int], rounds:
     for round_ in range(rounds):
         for cell in cells:
             for name in order_of(round_, names):
+                # A Ctrl-C that a finaliser swallowed (tracer/interrupt.py) stops the rounds
+                # here: the suite once saw this tool run on for a minute after its SIGINT.
+                interrupt.raise_if_interrupted()
                 answer = by_name[name].ask({"case": cell.case, "threads": cell.threads,
                                             "repeats": repeats, "size": size})  # fmt: skip
                 cell.seconds[name].append(answer["seconds"])
@@ -501,6 +506,9 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--json", type=Path, help="write the rows here")  # fmt: skip
     opts = parser.parse_args(args)
+    from tracer import interrupt  # the parent's; a worker loads its core before tracer
+
+    handlers = interrupt.install()
     try:
         variants = [parse_variant(v) for v in opts.variant]
         check_variants(variants)
@@ -534,6 +542,8 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:  # the workers are stopped by workers()' exit; nothing written
         print("build_ab: interrupted; no rows written", file=sys.stderr)
         return 130
+    finally:
+        interrupt.restore(handlers)
     for line in different_outputs(cells, names[0]):
         print(f"output differs: {line}")
     rows = summarize(cells, names)
