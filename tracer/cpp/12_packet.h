@@ -116,12 +116,14 @@ struct LaneMask {
     // As a Mask: all ones where true (a bool converts to 1).
     Mask mask() const { return Mask{} - __builtin_convertvector(bits, Mask); }
     unsigned lanes() const { return __builtin_bit_cast(uint8_t, bits); }
+    void set(int k, bool v) { bits[k] = v; }
 #else
     typedef Mask Bits;
     Bits bits;
     LaneMask(Mask m) : bits(m) {}
     Mask mask() const { return bits; }
     unsigned lanes() const { return lane_bits(bits); }
+    void set(int k, bool v) { bits[k] = v ? -1 : 0; }
 #endif
     LaneMask() = default;
     LaneMask operator&(LaneMask m) const { return LaneMask(Bits(bits & m.bits)); }

@@ -55,10 +55,12 @@ inline bool mesh_packets_serve(const Scene &scene) {
 }
 
 // The packet's rays as the box and triangle tests need them (SlabRay and WatertightRay per
-// lane), and each ray's own WatertightRay for the exact test.
+// lane), and each ray's own WatertightRay for the exact test. Lane masks are LaneMasks, one bit
+// a lane in a mask register with AVX-512 (12_packet.h): the bunny's primary rays 1.038x
+// [1.025-1.082] and 1.056x on the Xeon's one and two threads (9 rounds, the same hits).
 struct MeshRaysL {
     Vec3L o, inv_d, inv_d_far;
-    Mask near_x, near_y, near_z; // as SlabRay::near_x, ... (true: the max plane is near)
+    LaneMask near_x, near_y, near_z; // as SlabRay::near_x, ... (true: the max plane is near)
     int near[3]; // per axis: 1 (every lane's max plane is near), 0 (every lane's min), -1 mixed
     Vec3L d;
     bool shared_axes; // every lane's WatertightRay has the same kx, ky, kz
@@ -91,7 +93,7 @@ inline MeshRaysL mesh_rays(const RayL &ray) {
     r.inv_d = {1 / ray.d.x, 1 / ray.d.y, 1 / ray.d.z}; // 14_box.h reciprocal()
     r.inv_d_far = r.inv_d * splat(1 + 2 * gamma(3));
     r.near_x = r.inv_d.x < 0, r.near_y = r.inv_d.y < 0, r.near_z = r.inv_d.z < 0;
-    const Mask *nears[3] = {&r.near_x, &r.near_y, &r.near_z};
+    const LaneMask *nears[3] = {&r.near_x, &r.near_y, &r.near_z};
     for (int axis = 0; axis < 3; ++axis) {
         const unsigned bits = lane_bits(*nears[axis]);
         r.near[axis] = bits == (1u << rays_per_packet) - 1 ? 1 : bits == 0 ? 0 : -1;
@@ -129,14 +131,14 @@ inline void watertight(MeshRaysL &r) {
 // per lane by the sign of its 1/d, as planes[r.near_x] chooses it).
 // Always inlined, as mesh_closest_hits() below: called out of line, each call passed its
 // vectors of lanes through memory, and the search took a fifth longer (perf, issue 12).
-[[gnu::always_inline]] inline Mask slab_test(const AABB &box, const MeshRaysL &r, Lanes min,
+[[gnu::always_inline]] inline LaneMask slab_test(const AABB &box, const MeshRaysL &r, Lanes min,
                                              Lanes max, Lanes &t_near) {
     // BEGIN SOLUTION L09
     // PROMPT: A copy, lane by lane, of slab_test() for a packet of rays.
     const Vec3 *planes = &box.min; // planes[0] = min, planes[1] = max
     // Each lane's near and far plane per axis: one value for all lanes where they agree (rays
     // through neighbouring pixels nearly always do), else chosen lane by lane.
-    auto plane = [&](int axis, Mask near, bool far) {
+    auto plane = [&](int axis, LaneMask near, bool far) {
         if (r.near[axis] >= 0) return splat(planes[r.near[axis] ^ int(far)][axis]);
         return far ? select(near, splat(box.min[axis]), splat(box.max[axis]))
                    : select(near, splat(box.max[axis]), splat(box.min[axis]));
@@ -186,25 +188,25 @@ struct TriangleHitL {
 // shearing the triangle again, cost more than this test in all eight (perf, issue 12).
 // Always inlined into the leaf loop (GCC kept it out of line, a fifth of the bunny's primary
 // rays' time in it): 1.02x on one thread and on two (Zen 4, five alternating rounds).
-[[gnu::always_inline]] inline Mask intersect_triangle(const Vec3 &p0, const Vec3 &p1,
+[[gnu::always_inline]] inline LaneMask intersect_triangle(const Vec3 &p0, const Vec3 &p1,
                                                       const Vec3 &p2, const MeshRaysL &r,
-                                                      Mask lanes, Lanes min, Lanes max,
+                                                      LaneMask lanes, Lanes min, Lanes max,
                                                       TriangleHitL &th) {
     // BEGIN SOLUTION L08
     // PROMPT: A copy, lane by lane, of intersect_triangle() for a packet of rays.
     const Lanes o[3] = {r.o.x, r.o.y, r.o.z};
-    const Sheared<Lanes, Mask> s = sheared_candidates<Lanes, Mask>(
+    const Sheared<Lanes, LaneMask> s = sheared_candidates<Lanes, LaneMask>(
         p0, p1, p2, o, r.kx, r.ky, r.kz, r.Sx, r.Sy, r.Sz, min, max);
-    Mask hit = lanes & s.candidates;
+    LaneMask hit = lanes & s.candidates;
     if (!any(hit)) return hit;
     const Lanes inv_det = 1 / s.det;
     const Lanes t = s.t_scaled * inv_det;
-    const Mask doubtful =
+    const LaneMask doubtful =
         hit & (t <= min + triangle_t_error({s.ax, s.ay, s.az}, {s.bx, s.by, s.bz},
                                            {s.cx, s.cy, s.cz}, s.e0, s.e1, s.e2, inv_det));
     for (unsigned bits = lane_bits(doubtful); bits != 0; bits &= bits - 1) {
         const int k = __builtin_ctz(bits);
-        if (!starts_off_the_plane_heading_in(p0, p1, p2, r.lane(k))) hit[k] = 0;
+        if (!starts_off_the_plane_heading_in(p0, p1, p2, r.lane(k))) hit.set(k, false);
     }
     th = {t, s.e0 * inv_det, s.e1 * inv_det, s.e2 * inv_det};
     return hit;
@@ -214,20 +216,20 @@ struct TriangleHitL {
 // Each ray's closest hit in `mesh` within (min, max] (max shrinks to it): for the lanes of
 // `active`, th[k] and triangle[k] where found[k]. Boxes and triangles are counted once per ray
 // that takes part in the test, as the one-ray search counts them.
-[[gnu::always_inline]] inline Mask mesh_closest_hits(const Mesh &mesh, MeshRaysL &r,
-                                                   Mask active, Lanes min, Lanes &max,
+[[gnu::always_inline]] inline LaneMask mesh_closest_hits(const Mesh &mesh, MeshRaysL &r,
+                                                   LaneMask active, Lanes min, Lanes &max,
                                                    TriangleHit (&th)[rays_per_packet],
                                                    int (&triangle)[rays_per_packet],
                                                    RayCounts &counts) {
-    Mask found = mask_all(false);
+    LaneMask found = mask_all(false);
     struct Pending {
         int node;
-        Mask lanes;
+        LaneMask lanes;
         Lanes t_near;
     } stack[Mesh::max_tree_depth + 1];
     Lanes t_root;
     counts.box_tests += uint64_t(count(active));
-    Mask lanes = active & slab_test(mesh.nodes[0].bounds, r, min, max, t_root);
+    LaneMask lanes = active & slab_test(mesh.nodes[0].bounds, r, min, max, t_root);
     if (!any(lanes)) return found;
     watertight(r);
     int top = 0, index = 0;
@@ -239,7 +241,8 @@ struct TriangleHitL {
                 const Vec3 *v = &mesh.leaf_vertices[3 * size_t(i)];
                 if (r.shared_axes) { // all lanes at once
                     TriangleHitL hit;
-                    const Mask hits = intersect_triangle(v[0], v[1], v[2], r, lanes, min, max, hit);
+                    const LaneMask hits =
+                        intersect_triangle(v[0], v[1], v[2], r, lanes, min, max, hit);
                     if (!any(hits)) continue;
                     max = select(hits, hit.t, max);
                     found |= hits;
@@ -256,7 +259,7 @@ struct TriangleHitL {
                     if (intersect_triangle(v[0], v[1], v[2], r.lane(k), {min[k], max[k]}, hit)) {
                         th[k] = hit, triangle[k] = mesh.order[size_t(i)];
                         max[k] = hit.t;
-                        found[k] = -1;
+                        found.set(k, true);
                     }
                 }
             }
@@ -264,8 +267,9 @@ struct TriangleHitL {
             const int left = index + 1, right = node.first;
             Lanes t_left, t_right;
             counts.box_tests += 2 * uint64_t(count(lanes));
-            Mask in_left = lanes & slab_test(mesh.nodes[size_t(left)].bounds, r, min, max, t_left);
-            Mask in_right =
+            LaneMask in_left =
+                lanes & slab_test(mesh.nodes[size_t(left)].bounds, r, min, max, t_left);
+            LaneMask in_right =
                 lanes & slab_test(mesh.nodes[size_t(right)].bounds, r, min, max, t_right);
             const bool l = any(in_left), rr = any(in_right);
             if (l && rr) { // the child the first of the rays enters first, then the other
@@ -352,7 +356,7 @@ inline Vec3L block_up(const Camera &cam, int j0) {
 // A packet's pixels where its rays meet nothing. Not inlined: inlined, it made the tile's loop
 // too large for GCC to inline the search (mesh_closest_hits(), slab_test()) into it, which
 // cost more than the rays it spares.
-[[gnu::noinline]] inline void store_misses(float *out, int width, int i0, int j0, Mask active) {
+[[gnu::noinline]] inline void store_misses(float *out, int width, int i0, int j0, LaneMask active) {
     for (unsigned bits = lane_bits(active); bits != 0; bits &= bits - 1) {
         const int k = __builtin_ctz(bits);
         store_aov(out, width, i0 + k % packet_columns, j0 + k / packet_columns, Hit{});
@@ -380,9 +384,10 @@ inline void render_tile_aov_packets(const Scene &scene, int x0, int y0, int x1, 
         const Vec3L up = block_up(cam, j0);
         for (int c = 0, i0 = x0; i0 < x1; ++c, i0 += packet_columns) {
             // Lanes past the tile's edge are rays through pixels beyond it, masked off.
-            Mask active = mask_all(false);
+            LaneMask active = mask_all(false);
             for (int k = 0; k < rays_per_packet; ++k)
-                if (i0 + k % packet_columns < x1 && j0 + k / packet_columns < y1) active[k] = -1;
+                if (i0 + k % packet_columns < x1 && j0 + k / packet_columns < y1)
+                    active.set(k, true);
             counts.primary += uint64_t(count(active));
             if (!seen.may_meet(i0, i0 + packet_columns, j0, j0 + packet_rows)) {
                 // Every ray misses every root box, as each mesh's slab test would find: counted
@@ -402,7 +407,8 @@ inline void render_tile_aov_packets(const Scene &scene, int x0, int y0, int x1, 
                 const Mesh &mesh = static_cast<const Mesh &>(*object);
                 TriangleHit here[rays_per_packet];
                 int t[rays_per_packet];
-                Mask found = mesh_closest_hits(mesh, r, active, splat(0.0), max, here, t, counts);
+                LaneMask found =
+                    mesh_closest_hits(mesh, r, active, splat(0.0), max, here, t, counts);
                 for (unsigned bits = lane_bits(found); bits != 0; bits &= bits - 1) {
                     const int k = __builtin_ctz(bits);
                     owner[k] = &mesh, th[k] = here[k], triangle[k] = t[k];
