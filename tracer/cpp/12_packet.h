@@ -565,7 +565,6 @@ struct ClosestL {
     Mask id;
 };
 
-inline Mask select(Mask m, Mask a, Mask b) { return m ? a : b; }
 inline Mask select(LaneMask m, Mask a, Mask b) { return m.mask() ? a : b; }
 
 // Whether `skip` holds every sphere of the scene. closest_hit() and any_hit() then leave out
