@@ -195,6 +195,39 @@ inline Vec3L select(LaneMask m, const Vec3L &a, const Vec3L &b) {
     return {select(m, a.x, b.x), select(m, a.y, b.y), select(m, a.z, b.z)};
 }
 
+// A normal that is a coordinate axis, as Ex 25's floor's (0, 1, 0): its dot product with a vector
+// v is v.x * 0 + v.y * 1 + v.z * 0 in 06_plane.h and 10_classic.h. For finite v (every ray,
+// point and error bound the tracer makes is finite) the two zero terms are zeros, and adding a
+// zero changes a sum only where the sum is zero itself, and then only in the sign of that zero.
+// So where the packet tracer takes of such a dot product only its sign (plane_t()'s t > 0, the
+// sides of face_the_ray() and leaving_origin()), or its value where it is not zero (a light's
+// N.L where it is > 0, reflect()'s d.N for a ray that met the plane and so is not parallel to
+// it), v.y alone gives the same bits as dot()'s five operations; and with error bounds, whose
+// coordinates are never below 0, dot(abs(N), p_error) is p_error.y exactly (away_origin()). A
+// floor packet of Ex 25 takes some fifteen such dot products a level: its own, its shadow rays'
+// and its reflection's with the floor's normal, and their tests of the floor. Each a coordinate
+// instead of five operations on the two ports that bound a floor packet: Ex 25 1.060x
+// [1.037-1.093] on one thread of the Intel Xeon and 1.051x [1.010-1.094] on two (9 alternating
+// rounds, the same bits). The axis is found once, where the scene is made (Plane::axis): found
+// at each test of the plane, from the normal's coordinates, it gave back a third of that
+// (issue 12).
+// unit_axis(): k where n is the unit vector of axis k (1 there, 0 elsewhere), or -1.
+inline int unit_axis(const Vec3 &n) {
+    for (int k = 0; k < 3; ++k)
+        if (n[k] == 1 && n[(k + 1) % 3] == 0 && n[(k + 2) % 3] == 0) return k;
+    return -1;
+}
+// dot(v, n) for such uses, where n is the unit vector of `axis` (unit_axis()); dot() itself
+// where axis is -1.
+inline Lanes dot_unit(const Vec3L &v, int axis, const Vec3L &n) {
+    switch (axis) {
+    case 0: return v.x;
+    case 1: return v.y;
+    case 2: return v.z;
+    default: return dot(v, n);
+    }
+}
+
 struct ColorL {
     Lanes r, g, b;
 };
@@ -247,9 +280,10 @@ inline Lanes plane_t(const Plane &pl, const RayL &ray) {
     // BEGIN SOLUTION L03
     // PROMPT: The packet tracer's copy of 06_plane.h plane_t(), one ray per lane: not part of the
     // PROMPT: exercise, hidden until lesson L03 is done (the lessons use the one-ray tracer).
-    Vec3L n = splat(pl.normal);
-    Lanes denom = dot(ray.d, n);
-    Lanes t = dot(splat(pl.point) - ray.o, n) / denom;
+    const int axis = pl.axis; // dot_unit(): t is taken only where t > 0
+    const Vec3L n = splat(pl.normal);
+    Lanes denom = dot_unit(ray.d, axis, n);
+    Lanes t = dot_unit(splat(pl.point) - ray.o, axis, n) / denom;
     return select(denom == 0, splat(infinity), t);
     // END SOLUTION
 }
@@ -264,8 +298,9 @@ inline Lanes plane_t(const Plane &pl, const RayL &ray) {
 // Clang 19; tried before with GCC 12's build and lane-by-lane pixel stores, it had gained
 // nothing; issue 12).
 inline Mask may_be_ahead(const Plane &pl, const RayL &ray) {
+    const int axis = pl.axis; // their signs: dot_unit()
     const Vec3L n = splat(pl.normal);
-    const Lanes denom = dot(ray.d, n), num = dot(splat(pl.point) - ray.o, n);
+    const Lanes denom = dot_unit(ray.d, axis, n), num = dot_unit(splat(pl.point) - ray.o, axis, n);
     return ((num > 0) & (denom > 0)) | ((num < 0) & (denom < 0));
 }
 
@@ -683,6 +718,9 @@ struct HitL {
     Mask material;
     unsigned spheres_met = 0; // bit s: some lane met sphere s (s < max_culled)
     bool others_met = false;  // some lane met a plane, or a sphere after those
+    // Where every live lane met one plane whose normal is the unit vector of an axis, N and Ng
+    // in every lane: that axis (unit_axis()); else -1.
+    int axis = -1;
 };
 
 inline Vec3L select(LaneMask m, const Vec3 &a, const Vec3L &b) {
@@ -712,9 +750,11 @@ inline HitL hit_record(const Scene &scene, const RayL &ray, const ClosestL &c, L
         is_sphere |= here;
         h.material = select(here, Mask{} + s.material, h.material);
     }
+    const Plane *one_plane = nullptr; // the plane every live lane met, if one did
     for (const Plane &pl : scene.planes) {
         const LaneMask here = active & (c.id == id++);
         if (!any(here)) continue;
+        if (!any(active & ~here)) one_plane = &pl;
         h.others_met = true;
         centre = select(here, pl.point, centre);
         normal = select(here, pl.normal, normal);
@@ -748,6 +788,7 @@ inline HitL hit_record(const Scene &scene, const RayL &ray, const ClosestL &c, L
         }
     }
     h.Ng = h.N;
+    if (one_plane != nullptr) h.axis = one_plane->axis;
     return h;
 }
 
@@ -759,25 +800,26 @@ inline HitL hit_record(const Scene &scene, const RayL &ray, const ClosestL &c, L
 // threads (9 rounds; 1.022x and 0.998x in a first set of 7), the same bits (issue 12).
 struct FacingL {
     Vec3L N, Ng;
+    int axis = -1; // as HitL's
 };
 inline FacingL face_the_ray(const HitL &hit, const Vec3L &d) {
     // BEGIN SOLUTION L04
     // PROMPT: The packet tracer's copy of 04_hit.h face_the_ray(), one ray per lane: not part of
     // PROMPT: the exercise, hidden until lesson L04 is done (the lessons use the one-ray tracer).
-    const LaneMask turned = dot(hit.Ng, d) > 0;
-    if (!any(turned)) return {hit.N, hit.Ng};
+    const LaneMask turned = dot_unit(d, hit.axis, hit.Ng) > 0; // its sign: dot_unit()
+    if (!any(turned)) return {hit.N, hit.Ng, hit.axis};
     Vec3L Ng = select(turned, -hit.Ng, hit.Ng);
     Vec3L N = select(dot(hit.N, Ng) < 0, -hit.N, hit.N);
     return {N, Ng};
     // END SOLUTION
 }
 
-// 10_classic.h reflect(), per lane.
-inline Vec3L reflect(const Vec3L &d, const Vec3L &N) {
+// 10_classic.h reflect(), per lane, for the rays that met the points of `f`.
+inline Vec3L reflect(const Vec3L &d, const FacingL &f) {
     // BEGIN SOLUTION L06
     // PROMPT: The packet tracer's copy of 10_classic.h reflect(), one ray per lane: not part of the
     // PROMPT: exercise, hidden until lesson L06 is done (the lessons use the one-ray tracer).
-    return d - N * (2 * dot(d, N));
+    return d - f.N * (2 * dot_unit(d, f.axis, f.N)); // not 0 where d met a plane: dot_unit()
     // END SOLUTION
 }
 
@@ -786,26 +828,42 @@ inline Vec3L reflect(const Vec3L &d, const Vec3L &N) {
 // offset_ray_origin() depends on the direction the ray leaves in only through the side of Ng
 // it leaves on (its select on dot(toward, N) < 0). A point's reflected ray and its shadow rays
 // to the lights it faces all leave on Ng's side, so that origin is computed once a level
-// (`away`, away_origin(): offset_ray_origin(p, p_error, Ng, Ng), since dot(Ng, Ng) < 0 is never
-// true, as for any ray leaving on Ng's side or along its plane) and each ray takes it;
+// (`away`, away_origin(): offset_ray_origin(p, p_error, Ng, Ng), as for any ray leaving on Ng's
+// side or along its plane) and each ray takes it;
 // offset_ray_origin() runs again only for a packet in which one of `lanes` leaves on the other
 // side (leaving_origin()). Once a level instead of three times: Ex 25 1.06x on 1 and 2
 // threads, the same bits (paired A/B, issue 12). The binding leaving_origins, which calls both,
 // is tested lane by lane against the one-ray offset_ray_origin() (tests/tracer/test_packet.py).
-inline Vec3L away_origin(const Vec3L &p, const Vec3L &p_error, const Vec3L &Ng) {
-    return offset_ray_origin(p, p_error, Ng, Ng);
+// away_origin() is offset_ray_origin(p, p_error, Ng, Ng) without its turn of the offset, which
+// happens where dot(Ng, Ng) < 0: a sum of squares, never. Where Ng is the unit vector of an axis
+// (FacingL), the offset's length dot(abs(Ng), p_error) is p_error's coordinate along it
+// (dot_unit()), times Ng's 1 there; along the other axes the offset is Ng's zero times a length
+// (a zero of that zero's sign, so Ng's coordinate itself), where next_away() leaves the
+// coordinate as p + offset gives it.
+inline Vec3L away_origin(const Vec3L &p, const Vec3L &p_error, const FacingL &f) {
+    const Vec3L &Ng = f.Ng;
+    switch (f.axis) {
+    case 0: return {next_away(p.x + p_error.x, p_error.x), p.y + Ng.y, p.z + Ng.z};
+    case 1: return {p.x + Ng.x, next_away(p.y + p_error.y, p_error.y), p.z + Ng.z};
+    case 2: return {p.x + Ng.x, p.y + Ng.y, next_away(p.z + p_error.z, p_error.z)};
+    default: {
+        const Vec3L offset = Ng * dot(abs(Ng), p_error);
+        const Vec3L po = p + offset;
+        return {next_away(po.x, offset.x), next_away(po.y, offset.y), next_away(po.z, offset.z)};
+    }
+    }
 }
 
-inline Vec3L leaving_origin(const Vec3L &p, const Vec3L &p_error, const Vec3L &Ng,
+inline Vec3L leaving_origin(const Vec3L &p, const Vec3L &p_error, const FacingL &f,
                             const Vec3L &away, const Vec3L &toward, LaneMask lanes) {
-    const LaneMask back = dot(toward, Ng) < 0;
+    const LaneMask back = dot_unit(toward, f.axis, f.Ng) < 0; // its sign: dot_unit()
     if (!any(back & lanes)) return away;
-    return select(back, offset_ray_origin(p, p_error, Ng, toward), away);
+    return select(back, offset_ray_origin(p, p_error, f.Ng, toward), away);
 }
 
-inline RayL secondary_ray(const HitL &hit, const Vec3L &Ng, const Vec3L &away,
+inline RayL secondary_ray(const HitL &hit, const FacingL &f, const Vec3L &away,
                           const Vec3L &direction, LaneMask lanes) {
-    return {leaving_origin(hit.p, hit.p_error, Ng, away, direction, lanes), direction};
+    return {leaving_origin(hit.p, hit.p_error, f, away, direction, lanes), direction};
 }
 
 struct ShadowRayL {
@@ -813,36 +871,36 @@ struct ShadowRayL {
     double max_t; // the same reach for every lane: they go to the same light
 };
 
-inline ShadowRayL shadow_ray_to(const HitL &hit, const Vec3L &Ng, const Vec3L &away,
+inline ShadowRayL shadow_ray_to(const HitL &hit, const FacingL &f, const Vec3L &away,
                                 const Vec3 &point, LaneMask lanes) {
     // BEGIN SOLUTION L05
     // PROMPT: The packet tracer's copy of 04_hit.h shadow_ray_to(), one ray per lane: not part of
     // PROMPT: the exercise, hidden until lesson L05 is done (the lessons use the one-ray tracer).
     const Vec3L to = splat(point);
-    Vec3L o = leaving_origin(hit.p, hit.p_error, Ng, away, to - hit.p, lanes);
+    Vec3L o = leaving_origin(hit.p, hit.p_error, f, away, to - hit.p, lanes);
     return {{o, to - o}, 1.0};
     // END SOLUTION
 }
 
-inline ShadowRayL shadow_ray_towards(const HitL &hit, const Vec3L &Ng, const Vec3L &away,
+inline ShadowRayL shadow_ray_towards(const HitL &hit, const FacingL &f, const Vec3L &away,
                                      const Vec3 &direction, LaneMask lanes) {
     // BEGIN SOLUTION L05
     // PROMPT: The packet tracer's copy of 04_hit.h shadow_ray_towards(), one ray per lane: not part
     // PROMPT: of the exercise, hidden until lesson L05 is done (the lessons use the one-ray
     // PROMPT: tracer).
     const Vec3L d = splat(direction);
-    return {{leaving_origin(hit.p, hit.p_error, Ng, away, d, lanes), d}, infinity};
+    return {{leaving_origin(hit.p, hit.p_error, f, away, d, lanes), d}, infinity};
     // END SOLUTION
 }
 
-inline ShadowRayL shadow_ray(const HitL &hit, const Vec3L &Ng, const Vec3L &away,
+inline ShadowRayL shadow_ray(const HitL &hit, const FacingL &f, const Vec3L &away,
                              const Light &light, LaneMask lanes) {
     // BEGIN SOLUTION L05
     // PROMPT: The packet tracer's copy of 10_classic.h shadow_ray(), one ray per lane: not part of
     // PROMPT: the exercise, hidden until lesson L05 is done (the lessons use the one-ray tracer).
     if (light.type == Light::Type::directional)
-        return shadow_ray_towards(hit, Ng, away, -light.direction, lanes);
-    return shadow_ray_to(hit, Ng, away, light.position, lanes);
+        return shadow_ray_towards(hit, f, away, -light.direction, lanes);
+    return shadow_ray_to(hit, f, away, light.position, lanes);
     // END SOLUTION
 }
 
@@ -914,9 +972,8 @@ inline LaneMask in_shadow(const Scene &scene, const ShadowRayL &shadow, LaneMask
         }
     }
     const FacingL f = face_the_ray(hit, ray.d); // the side we see is the side we shade
-    const Vec3L &N = f.N;
-    const Vec3L away = away_origin(hit.p, hit.p_error, f.Ng); // leaving_origin()
-    Vec3L R = reflect(ray.d, N);
+    const Vec3L away = away_origin(hit.p, hit.p_error, f); // leaving_origin()
+    Vec3L R = reflect(ray.d, f);
 
     // local_color()
     ColorL local = m_color * (splat(s.ambient_light) * ambient);
@@ -927,7 +984,7 @@ inline LaneMask in_shadow(const Scene &scene, const ShadowRayL &shadow, LaneMask
         Vec3L L;
         if (light.type == Light::Type::directional) L = splat(-light.direction);
         else L = normalize(splat(light.position) - hit.p);
-        Lanes NL = dot(N, L);
+        Lanes NL = dot_unit(L, f.axis, f.N); // taken where > 0: dot_unit()
         LaneMask lit = shaded & (NL > 0);
         if (!any(lit)) continue;
         unsigned cannot_block = 0;
@@ -935,7 +992,7 @@ inline LaneMask in_shadow(const Scene &scene, const ShadowRayL &shadow, LaneMask
             if (!hit.others_met) cannot_block = culling->cannot_block(hit.spheres_met, int(l));
             else if (plane >= 0) cannot_block = primary->shadowed(plane, int(l));
         }
-        lit &= ~in_shadow(scene, shadow_ray(hit, f.Ng, away, light, lit), lit, counts,
+        lit &= ~in_shadow(scene, shadow_ray(hit, f, away, light, lit), lit, counts,
                           cannot_block);
         if (!any(lit)) continue;
         const ColorL lc = splat(light.color);
@@ -969,7 +1026,7 @@ inline LaneMask in_shadow(const Scene &scene, const ShadowRayL &shadow, LaneMask
     add_where(active, color, local * coef);
     active &= reflectivity != 0;
     coef *= reflectivity;
-    if (any(active)) ray = secondary_ray(hit, f.Ng, away, R, active);
+    if (any(active)) ray = secondary_ray(hit, f, away, R, active);
     if (plane >= 0 && any(active)) reflected = primary->reflected(plane);
     return active;
     // END SOLUTION

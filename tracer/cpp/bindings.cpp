@@ -9,6 +9,7 @@
 #include <nanobind/stl/tuple.h>
 #include <nanobind/stl/vector.h>
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdlib>
@@ -20,6 +21,7 @@
 #include <string>
 #include <tuple>
 #include <unordered_map>
+#include <vector>
 
 #include "01_vec3.h"
 #include "02_ray.h"
@@ -355,7 +357,9 @@ NB_MODULE(_core, m) {
         .def(
             "add_plane",
             [](rt::Scene &s, Triple point, Triple normal, int object, int material) {
-                s.planes.push_back({vec(point), rt::normalize(vec(normal)), object, material});
+                rt::Plane pl{vec(point), rt::normalize(vec(normal)), object, material};
+                pl.axis = rt::unit_axis(pl.normal);
+                s.planes.push_back(pl);
             },
             "point"_a, "normal"_a, "object"_a, "material"_a)
         .def(
@@ -455,7 +459,33 @@ NB_MODULE(_core, m) {
                 Color c = rt::trace(s, {vec(origin), rt::normalize(vec(direction))}, counts);
                 return std::make_tuple(triple(c), counts_dict(counts));
             },
-            "origin"_a, "direction"_a, "The classic colour seen along one ray.");
+            "origin"_a, "direction"_a, "The classic colour seen along one ray.")
+        .def(
+            "trace_packet",
+            [](const rt::Scene &s, std::vector<Triple> origins, std::vector<Triple> directions) {
+                const size_t n = origins.size();
+                if (n == 0 || n > size_t(rt::rays_per_packet) || directions.size() != n)
+                    throw std::invalid_argument("1 to " + std::to_string(rt::rays_per_packet) +
+                                                " origins and as many directions expected");
+                if (!rt::packets_serve(s))
+                    throw std::invalid_argument("packets serve scenes of spheres and planes only");
+                rt::RayL rays{};
+                for (size_t k = 0; k < n; ++k) {
+                    const rt::Vec3 o = vec(origins[k]), d = rt::normalize(vec(directions[k]));
+                    rays.o.x[k] = o.x, rays.o.y[k] = o.y, rays.o.z[k] = o.z;
+                    rays.d.x[k] = d.x, rays.d.y[k] = d.y, rays.d.z[k] = d.z;
+                }
+                rt::RayCounts counts;
+                const rt::ColorL c =
+                    rt::trace(s, rays, rt::first_lanes(int(n)), counts, nullptr, nullptr);
+                std::vector<Triple> out(n);
+                for (size_t k = 0; k < n; ++k) out[k] = {c.r[k], c.g[k], c.b[k]};
+                return std::make_tuple(out, counts_dict(counts));
+            },
+            "origins"_a, "directions"_a,
+            "The classic colours seen along up to rays_per_packet rays traced as one packet "
+            "(12_packet.h trace(), without the render's culling), in double precision: each "
+            "lane's is trace()'s for its ray, bit for bit.");
 
     nb::enum_<Integrator>(m, "Integrator", "What a render traces.")
         .value("classic", Integrator::classic, "the classic model, one ray at a time")
@@ -555,7 +585,14 @@ NB_MODULE(_core, m) {
                 return l;
             };
             const rt::Vec3L pl = lanes(p), el = lanes(p_error), nl = lanes(normal);
-            const rt::Vec3L o = rt::leaving_origin(pl, el, nl, rt::away_origin(pl, el, nl),
+            // Lanes whose normals are one axis's unit vector take its shortcuts (rt::dot_unit()),
+            // as a packet whose rays all met one such plane does.
+            rt::FacingL f{nl, nl};
+            const int axis = rt::unit_axis(vec(normal[0]));
+            if (std::all_of(normal.begin(), normal.end(),
+                            [&](const Triple &t) { return rt::unit_axis(vec(t)) == axis; }))
+                f.axis = axis;
+            const rt::Vec3L o = rt::leaving_origin(pl, el, f, rt::away_origin(pl, el, f),
                                                    lanes(toward), rt::mask_all(true));
             std::array<Triple, rt::rays_per_packet> out;
             for (int k = 0; k < rt::rays_per_packet; ++k)
