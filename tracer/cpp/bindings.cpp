@@ -28,6 +28,7 @@
 #include "03_camera.h"
 #include "04_hit.h"
 #include "05_sphere.h"
+#include "06_plane.h"
 #include "08_light.h"
 #include "09_scene.h"
 #include "10_classic.h"
