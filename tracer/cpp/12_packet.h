@@ -9,13 +9,16 @@
 // coordinates; packets of them would need a second copy of every one of those files, and the
 // lecture's code is kept as one plain copy. This file adds speed, not behaviour: every step
 // below is the step of 05_sphere.h, 06_plane.h, 09_scene.h and 10_classic.h with the same
-// operations in the same order, and the shared steps of 04_hit.h (face_the_ray(),
-// secondary_ray(), shadow_ray_to(), shadow_ray_towards()) keep their names as overloads, so each
-// lane computes bit for bit what the one-ray code computes (IEEE-754 add, mul, div and sqrt are
-// correctly rounded in vector units too, and the build forbids fused multiply-add contraction).
-// tests/tracer/test_packet.py renders every canonical scene of spheres and planes both ways and
-// requires equal images. Where lanes disagree (one hits a sphere, the next a plane), masks choose
-// per lane; a lane whose ray has finished is masked off until the whole packet is done.
+// operations in the same order (or fewer, where they provably give the same bits: the dot
+// products with a normal that is an axis, dot_unit()), and the shared steps of 04_hit.h
+// (face_the_ray(), secondary_ray(), shadow_ray_to(), shadow_ray_towards()) keep their names as
+// overloads, so each lane computes bit for bit what the one-ray code computes (IEEE-754 add,
+// mul, div and sqrt are correctly rounded in vector units too, and the build forbids fused
+// multiply-add contraction). tests/tracer/test_packet.py renders every canonical scene of
+// spheres and planes both ways and requires equal images, and compares packets' colours with
+// single rays' in double precision (the binding Scene.trace_packet). Where lanes disagree (one
+// hits a sphere, the next a plane), masks choose per lane; a lane whose ray has finished is
+// masked off until the whole packet is done.
 #pragma once
 
 #include <algorithm>
