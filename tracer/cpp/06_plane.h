@@ -15,8 +15,9 @@ struct Plane {
     Vec3 point;
     Vec3 normal{0, 1, 0}; // unit length (the scene loader normalises it)
     int object = -1, material = -1;
-    // For the packet tracer only (12_packet.h unit_axis()): k where the normal is the unit vector
-    // of axis k, as the floor's (0, 1, 0) is of y; -1 where it is not, or not known.
+    // For the packet tracer only (12_packet.h unit_axis(), set where the scene is made): k where
+    // the normal is the unit vector of axis k, as the floor's (0, 1, 0) is of y; -1 where it is
+    // not, or where nobody looked.
     int axis = -1;
 };
 

@@ -721,8 +721,8 @@ struct HitL {
     Mask material;
     unsigned spheres_met = 0; // bit s: some lane met sphere s (s < max_culled)
     bool others_met = false;  // some lane met a plane, or a sphere after those
-    // Where every live lane met one plane whose normal is the unit vector of an axis, N and Ng
-    // in every lane: that axis (unit_axis()); else -1.
+    // Where every live lane met one plane whose normal (N and Ng in every lane) is an axis's
+    // unit vector: that axis (unit_axis()); else -1.
     int axis = -1;
 };
 
