@@ -248,6 +248,25 @@ def test_packet_lanes_trace_as_single_rays_in_a_room_of_axis_planes(below):
     assert min(kinds.values()) > 20 or below, kinds
 
 
+def test_trace_packet_refuses_what_a_packet_cannot_hold():
+    """Scene.trace_packet takes 1 to rays_per_packet rays, a direction for each origin, and a
+    scene of spheres and planes; anything else is refused with a message, not traced."""
+    width = _core.rays_per_packet
+    scene = to_core(tracer.load_scene(axis_room([0.5, 2.0, 4.0], [-1.0, 0.5, -3.0])))
+    for origins, directions in (
+        ([], []),
+        ([[0.0, 1.0, 0.0]] * (width + 1), [[0.0, 0.0, -1.0]] * (width + 1)),
+        ([[0.0, 1.0, 0.0]] * 2, [[0.0, 0.0, -1.0]]),
+    ):
+        with pytest.raises(ValueError, match=f"1 to {width} origins and as many directions"):
+            scene.trace_packet(origins, directions)
+    boxed = scene_dict(
+        objects=[{"type": "box", "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 1.0], "material": "m"}]
+    )
+    with pytest.raises(ValueError, match="spheres and planes only"):
+        to_core(tracer.load_scene(boxed)).trace_packet([[0.0, 0.5, 3.0]], [[0.0, 0.0, -1.0]])
+
+
 def test_packets_equal_single_rays_in_a_room_of_axis_planes():
     """The whole render, with the render's culling, from inside the room and from under it."""
     packets_agree(tracer.load_scene(axis_room([0.5, 2.0, 4.0], [-1.0, 0.5, -3.0])))
