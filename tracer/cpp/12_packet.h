@@ -753,11 +753,10 @@ inline HitL hit_record(const Scene &scene, const RayL &ray, const ClosestL &c, L
         is_sphere |= here;
         h.material = select(here, Mask{} + s.material, h.material);
     }
-    const Plane *one_plane = nullptr; // the plane every live lane met, if one did
     for (const Plane &pl : scene.planes) {
         const LaneMask here = active & (c.id == id++);
         if (!any(here)) continue;
-        if (!any(active & ~here)) one_plane = &pl;
+        if (!any(active & ~here)) h.axis = pl.axis; // every live lane met this plane
         h.others_met = true;
         centre = select(here, pl.point, centre);
         normal = select(here, pl.normal, normal);
@@ -791,7 +790,6 @@ inline HitL hit_record(const Scene &scene, const RayL &ray, const ClosestL &c, L
         }
     }
     h.Ng = h.N;
-    if (one_plane != nullptr) h.axis = one_plane->axis;
     return h;
 }
 
@@ -831,29 +829,24 @@ inline Vec3L reflect(const Vec3L &d, const FacingL &f) {
 // offset_ray_origin() depends on the direction the ray leaves in only through the side of Ng
 // it leaves on (its select on dot(toward, N) < 0). A point's reflected ray and its shadow rays
 // to the lights it faces all leave on Ng's side, so that origin is computed once a level
-// (`away`, away_origin(): offset_ray_origin(p, p_error, Ng, Ng), as for any ray leaving on Ng's
-// side or along its plane) and each ray takes it;
+// (`away`, away_origin(): offset_ray_origin(p, p_error, Ng, Ng), since dot(Ng, Ng) < 0 is never
+// true, as for any ray leaving on Ng's side or along its plane) and each ray takes it;
 // offset_ray_origin() runs again only for a packet in which one of `lanes` leaves on the other
 // side (leaving_origin()). Once a level instead of three times: Ex 25 1.06x on 1 and 2
 // threads, the same bits (paired A/B, issue 12). The binding leaving_origins, which calls both,
 // is tested lane by lane against the one-ray offset_ray_origin() (tests/tracer/test_packet.py).
-// away_origin() is offset_ray_origin(p, p_error, Ng, Ng) without its turn of the offset, which
-// happens where dot(Ng, Ng) < 0: a sum of squares, never. Where Ng is the unit vector of an axis
-// (FacingL), the offset's length dot(abs(Ng), p_error) is p_error's coordinate along it
-// (dot_unit()), times Ng's 1 there; along the other axes the offset is Ng's zero times a length
-// (a zero of that zero's sign, so Ng's coordinate itself), where next_away() leaves the
-// coordinate as p + offset gives it.
+// Where Ng is the unit vector of an axis (FacingL), away_origin() writes that call out: its turn
+// of the offset, where dot(Ng, Ng) < 0, never happens; the offset's length dot(abs(Ng),
+// p_error) is p_error's coordinate along the axis (dot_unit()), times Ng's 1 there; along the
+// other axes the offset is Ng's zero times a length (a zero of that zero's sign, so Ng's
+// coordinate itself), where next_away() leaves the coordinate as p + offset gives it.
 inline Vec3L away_origin(const Vec3L &p, const Vec3L &p_error, const FacingL &f) {
     const Vec3L &Ng = f.Ng;
     switch (f.axis) {
     case 0: return {next_away(p.x + p_error.x, p_error.x), p.y + Ng.y, p.z + Ng.z};
     case 1: return {p.x + Ng.x, next_away(p.y + p_error.y, p_error.y), p.z + Ng.z};
     case 2: return {p.x + Ng.x, p.y + Ng.y, next_away(p.z + p_error.z, p_error.z)};
-    default: {
-        const Vec3L offset = Ng * dot(abs(Ng), p_error);
-        const Vec3L po = p + offset;
-        return {next_away(po.x, offset.x), next_away(po.y, offset.y), next_away(po.z, offset.z)};
-    }
+    default: return offset_ray_origin(p, p_error, Ng, Ng);
     }
 }
 
