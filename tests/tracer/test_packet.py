@@ -428,7 +428,7 @@ def test_a_shadow_seen_by_one_pixel(pixel, light):
         render={"max_depth": 1},
         materials={"m": material(), "floor": material(diffuse=1.0)},
         lights=[light_at(light, position, p)],
-        objects=[plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], "floor"), sphere(centre.tolist(), radius)],
+        objects=[plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], "floor"), sphere(list(centre), radius)],
     )
     a = packets_agree(tracer.load_scene(data))
     assert a.image[j, i].sum() == 0  # in the shadow
@@ -495,6 +495,112 @@ def test_a_sphere_shadowed_at_one_pixel(pixel, light):
     a = packets_agree(tracer.load_scene(data))
     assert a.image[j, i].sum() == 0  # in the small sphere's shadow
     assert a.image[j, i - 1].sum() > 0 and a.image[j, i + 1].sum() > 0  # its neighbours lit
+
+
+# The rectangles of a sphere's image and of its mirror image are exact, and that of its shadow
+# on a plane nearly so (12_packet.h sphere_rect(), shadow_rect(): the image of a polygon 2%
+# outside the shadow), each with two pixels of margin. A ball some fifteen pixels in radius
+# whose edge (or the edge of its reflection, or of its shadow) passes a fifth of a pixel inside
+# one pixel centre, with nothing of it beyond that pixel in its packet (or tile): at a packet's
+# first column with the ball to its left, at its last column with the ball to its right, at a
+# tile's first row with the ball above it and at its last row with the ball below. The packets
+# must show that pixel as the one-ray code does, and the pixel beyond it must show nothing of
+# the ball (so the edge is where the test says). Smaller rectangles, which the tests of a ball a
+# fifth of a pixel across above cannot tell from these, fail here: the ball's angular radius,
+# a point light's cone's or a distant light's cylinder's radius taken at half its size, each
+# tried by editing the code.
+EDGE_CAMERA = {"width": 48, "height": 32}
+EDGE_FLOOR_CAMERA = {"eye": [0.0, 2.0, 6.0], "look_at": [0.0, 0.0, 0.0], "width": 48, "height": 32}
+# (pixel, the image's direction from that pixel into the ball, the pixel beyond the edge)
+EDGES = [
+    ((8, 12), "left", (9, 12)),
+    ((15, 12), "right", (14, 12)),
+    ((20, 16), "up", (20, 17)),
+    ((20, 15), "down", (20, 14)),
+]
+TOWARD = {
+    "left": np.array([-1.0, 0.0, 0.0]),
+    "right": np.array([1.0, 0.0, 0.0]),
+    "up": np.array([0.0, 1.0, 0.0]),
+    "down": np.array([0.0, -1.0, 0.0]),
+}
+
+
+def edge_centre(x: np.ndarray, d: np.ndarray, radius: float, inside: float, toward: np.ndarray):
+    """The centre of a ball of `radius` that the line through x along unit d passes `inside`
+    within its edge, off the line at x in `toward`'s direction made perpendicular to d."""
+    u = toward - np.dot(toward, d) * d
+    return x + (radius - inside) * u / np.linalg.norm(u)
+
+
+def meets(o: np.ndarray, d: np.ndarray, centre: np.ndarray, radius: float) -> bool:
+    """Whether the ray from o along unit d meets the ball ahead of o."""
+    f = o - centre
+    b = float(np.dot(f, d))
+    c = float(np.dot(f, f)) - radius * radius
+    return b * b - c >= 0 and (c < 0 or b < 0)
+
+
+@pytest.mark.parametrize(("pixel", "toward", "beyond"), EDGES)
+def test_the_edge_of_a_large_sphere_in_one_pixel(pixel, toward, beyond):
+    (i, j), radius = pixel, 1.5
+    eye, d, fifth = pixel_ray(i, j, EDGE_CAMERA)
+    centre = edge_centre(eye + 6.0 * d, d, radius, fifth * 6.0, TOWARD[toward])
+    data = scene_dict(camera=EDGE_CAMERA, materials={"m": material(ambient=1.0)},
+                      objects=[sphere(centre.tolist(), radius)])  # fmt: skip
+    a = packets_agree(tracer.load_scene(data))
+    assert a.image[j, i].sum() > 0
+    assert a.image[beyond[1], beyond[0]].sum() == 0
+
+
+@pytest.mark.parametrize(("pixel", "toward", "beyond"), EDGES)
+def test_the_edge_of_a_large_spheres_reflection_in_one_pixel(pixel, toward, beyond):
+    (i, j), radius = pixel, 1.0
+    eye, d, p, fifth = floor_hit(i, j, EDGE_FLOOR_CAMERA)
+    past = float(np.linalg.norm(p - eye)) + 3.0  # the mirror image's distance along the ray
+    image = edge_centre(eye + past * d, d, radius, fifth * past, TOWARD[toward])
+    centre = image * np.array([1.0, -1.0, 1.0])
+    for column, row in (pixel, beyond):  # the primary rays meet the floor, not the ball
+        e, dk, _ = pixel_ray(column, row, EDGE_FLOOR_CAMERA)
+        assert not meets(e, dk, centre, radius)
+    data = scene_dict(
+        camera=EDGE_FLOOR_CAMERA,
+        render={"max_depth": 2},
+        materials={"m": material(ambient=1.0), "mirror": material(reflectivity=1.0)},
+        objects=[plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], "mirror"), sphere(list(centre), radius)],
+    )
+    a = packets_agree(tracer.load_scene(data))
+    assert a.image[j, i].sum() > 0
+    assert a.image[beyond[1], beyond[0]].sum() == 0
+
+
+@pytest.mark.parametrize(("pixel", "toward", "beyond"), EDGES)
+@pytest.mark.parametrize("light", ["point", "directional"])
+def test_the_edge_of_a_large_spheres_shadow_in_one_pixel(pixel, toward, beyond, light):
+    (i, j), radius = pixel, 0.8
+    eye, _, p, fifth = floor_hit(i, j, EDGE_FLOOR_CAMERA)
+    position = np.array([1.0, 6.0, -2.0])
+    w = (position - p) / np.linalg.norm(position - p)  # from p towards the light
+    # The ball halfway to the light, the shadow ray from p inside its edge by half a fifth of a
+    # pixel at p (the floor point a fifth of a pixel away moves the ray that much there); the
+    # image's direction into the ball taken on the floor (rows: along -z, up in the image).
+    into = {"left": [-1.0, 0, 0], "right": [1.0, 0, 0], "up": [0, 0, -1.0], "down": [0, 0, 1.0]}
+    half = 0.5 * float(np.linalg.norm(position - p))
+    inside = 0.5 * fifth * float(np.linalg.norm(p - eye))
+    centre = edge_centre(p + half * w, w, radius, inside, np.array(into[toward]))
+    for column, row in (pixel, beyond):  # the primary rays meet the floor, not the ball
+        e, dk, _ = pixel_ray(column, row, EDGE_FLOOR_CAMERA)
+        assert not meets(e, dk, centre, radius)
+    data = scene_dict(
+        camera=EDGE_FLOOR_CAMERA,
+        render={"max_depth": 1},
+        materials={"m": material(), "floor": material(diffuse=1.0)},
+        lights=[light_at(light, position, p)],
+        objects=[plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], "floor"), sphere(list(centre), radius)],
+    )
+    a = packets_agree(tracer.load_scene(data))
+    assert a.image[j, i].sum() == 0  # in the shadow
+    assert a.image[beyond[1], beyond[0]].sum() > 0  # and the pixel beyond it lit
 
 
 # With several samples a pixel, a packet holds eight samples in order (at spp = 2, those of four

@@ -353,7 +353,8 @@ inline ImageSpan pixel_centres(int i0, int i1, int j0, int j1) {
 // through a pixel outside it meets the box in any test here: skipping those rays' test
 // changes nothing. 81% of the bunny's 1920 x 1024 primary rays miss its box; their packets'
 // set-up (a normalisation and three divisions) was a tenth of the render (perf, issue 12).
-// The same holds for a sphere in its bounding box (render_tile_packets()).
+// A sphere's rectangle is found exactly (sphere_rect()), and the packets of render_tile_packets()
+// skip the spheres whose rectangles hold none of their pixels.
 struct PixelRect {
     double i_min = -infinity, i_max = infinity, j_min = -infinity, j_max = infinity;
 
@@ -367,10 +368,23 @@ struct PixelRect {
     }
 };
 
-// A sphere's bounding box.
-inline AABB sphere_box(const Vec3 &centre, double radius) {
-    const Vec3 r{radius, radius, radius};
-    return {centre - r, centre + r};
+// 03_camera.h primary_ray()'s d = forward + a right + b true_up solved for the image point, in
+// pixel units: the column of a and the row of b (for one point, or a packet's lanes).
+template <class T> T image_column(const Camera &cam, T a) {
+    return ((a - cam.window_shift) * (1 / cam.plane_width) + 0.5) * cam.width;
+}
+template <class T> T image_row(const Camera &cam, T b) {
+    return (0.5 - b * (1 / cam.plane_height)) * cam.height;
+}
+
+// A rectangle around image points widened by the margin (see above); every pixel where it is
+// not finite.
+inline PixelRect widened(PixelRect rect) {
+    constexpr double margin = 2; // pixels
+    rect.i_min -= margin, rect.i_max += margin, rect.j_min -= margin, rect.j_max += margin;
+    if (!(rect.i_max - rect.i_min < infinity && rect.j_max - rect.j_min < infinity))
+        return PixelRect{};
+    return rect;
 }
 
 // Lanes k of corners first + k of a box (first a multiple of rays_per_packet): all ones where
@@ -392,20 +406,56 @@ inline PixelRect pixel_rect(const Camera &cam, const AABB &box) {
         const Vec3L v = c - splat(cam.eye);
         const Lanes depth = dot(v, splat(cam.forward));
         if (any(~(depth > 0))) return PixelRect{}; // at or behind the eye (or not finite): all
-        // 03_camera.h primary_ray()'s d = forward + a right + b true_up, solved for each corner.
         const Lanes inv = 1 / depth;
         const Lanes a = dot(v, splat(cam.right)) * inv, b = dot(v, splat(cam.true_up)) * inv;
-        const Lanes i = ((a - cam.window_shift) * (1 / cam.plane_width) + 0.5) * cam.width;
-        const Lanes j = (0.5 - b * (1 / cam.plane_height)) * cam.height;
+        const Lanes i = image_column(cam, a), j = image_row(cam, b);
         for (int k = 0; k < rays_per_packet; ++k)
             rect.i_min = std::min(rect.i_min, i[k]), rect.i_max = std::max(rect.i_max, i[k]),
             rect.j_min = std::min(rect.j_min, j[k]), rect.j_max = std::max(rect.j_max, j[k]);
     }
-    constexpr double margin = 2; // pixels (see above)
-    rect.i_min -= margin, rect.i_max += margin, rect.j_min -= margin, rect.j_max += margin;
-    if (!(rect.i_max - rect.i_min < infinity && rect.j_max - rect.j_min < infinity))
-        return PixelRect{}; // not finite: all
-    return rect;
+    return widened(rect);
+}
+
+// The same for the convex hull of n points: where all lie in front of the eye, the hull (every
+// point of it at positive depth too) is seen through the convex hull of their images.
+inline PixelRect points_rect(const Camera &cam, const Vec3 *points, int n) {
+    PixelRect rect{infinity, -infinity, infinity, -infinity};
+    for (int k = 0; k < n; ++k) {
+        const Vec3 v = points[k] - cam.eye;
+        const double depth = dot(v, cam.forward);
+        if (!(depth > 0)) return PixelRect{}; // at or behind the eye (or not finite): all
+        const double i = image_column(cam, dot(v, cam.right) / depth),
+                     j = image_row(cam, dot(v, cam.true_up) / depth);
+        rect.i_min = std::min(rect.i_min, i), rect.i_max = std::max(rect.i_max, i);
+        rect.j_min = std::min(rect.j_min, j), rect.j_max = std::max(rect.j_max, j);
+    }
+    return widened(rect);
+}
+
+// The pixels whose primary rays may meet a ball, exactly: a point x of it is seen at
+// a = (x - eye).right / (x - eye).forward (and b likewise along true_up). The ball's points,
+// taken along right and forward only, fill a disc of its radius around the centre's two
+// coordinates (an orthogonal projection of a ball is a disc), and over a disc wholly in front
+// of the eye (depth > radius) the ratio a takes its extremes on the two lines from the eye
+// tangent to it: at the angles mid -+ half from forward, mid the centre's angle and
+// sin(half) = radius / its distance. Not wholly in front, with a millionth of the distances to
+// spare: every pixel. (The rectangle of its bounding box, which the spheres took until
+// 2026-12-06, is 16% to 27% wider each way for Ex 25's spheres; with this one Ex 25's primary
+// packets test a sphere 51,968 times a frame instead of 73,666. Issue 12.)
+inline PixelRect sphere_rect(const Camera &cam, const Vec3 &centre, double radius) {
+    const Vec3 v = centre - cam.eye;
+    const double depth = dot(v, cam.forward);
+    if (!(depth - radius > 1e-6 * (std::fabs(depth) + radius))) return PixelRect{};
+    auto extent = [&](const Vec3 &across) { // the least and greatest ratio along `across`
+        const double side = dot(v, across);
+        const double mid = std::atan2(side, depth);
+        const double half = std::asin(radius / std::hypot(side, depth));
+        return std::pair{std::tan(mid - half), std::tan(mid + half)};
+    };
+    const auto [a_lo, a_hi] = extent(cam.right);
+    const auto [b_lo, b_hi] = extent(cam.true_up);
+    return widened({image_column(cam, a_lo), image_column(cam, a_hi), image_row(cam, b_hi),
+                    image_row(cam, b_lo)});
 }
 
 // The same rectangles answer two more questions for a primary ray that meets a plane (Ex 25's
@@ -414,52 +464,76 @@ inline PixelRect pixel_rect(const Camera &cam, const AABB &box) {
 // - Its reflected ray leaves the point p where it met the plane along the mirror image of its
 //   direction, so it meets a sphere just where the primary ray, going on past p, would meet the
 //   sphere's mirror image in the plane: the pixels of its reflection are those of the mirror
-//   image's box (mirrored_rect()).
+//   image (mirrored_rect()).
 // - Its shadow ray runs from p to a point light (or towards a distant one). A sphere blocks it
-//   only where p lies in the sphere's shadow on the plane: its projection onto the plane along
-//   the lines through the light (or along the light's direction). Where every corner of the
-//   sphere's box lies below the light's height above the plane, that projection is a
-//   projective map of the whole box (a parallel one, a linear map, always), which keeps convex
-//   sets convex: the box's shadow, and the sphere's in it, is the convex hull of the eight
-//   corners' shadows. (A part of the box on the plane's far side casts a shadow too, and so
-//   only widens it.) The pixels that see that shadow are those of the box around the corners'
-//   shadows (shadow_rect()). A sphere whose box reaches up to a point light's height is never
-//   skipped for that light.
+//   only where the line from the light through p meets the sphere: inside the cone from a point
+//   light that holds the sphere (half-angle asin(radius / distance)), or the cylinder around it
+//   along a distant light's direction. A pyramid of `sides` faces around the cone (a prism around
+//   the cylinder) holds it; where every edge of the pyramid meets the plane in front of the
+//   light, each ray from the light through the pyramid meets the plane there too (its dot
+//   product with the normal lies between the edges'), and the pyramid's section is the convex
+//   polygon of those `sides` points (a central projection from the light onto the plane, or for
+//   the prism a parallel one, keeps convex sets convex). The pixels that see that polygon are
+//   those of the rectangle around its corners' images (shadow_rect()). Otherwise (a sphere up
+//   to or above a point light's height, a light in the plane): every pixel. Around Ex 25's
+//   spheres these rectangles are 39% to 64% as wide as those of the eight corners of their
+//   bounding boxes' shadows, which the spheres took until 2026-12-06, and the floor's primary
+//   packets test their shadow rays against a sphere 23,549 times a frame instead of 67,261. With
+//   sphere_rect(): Ex 25 1.004x and 1.022x on one thread (build_ab, 9 and 11 rounds), 1.015x in
+//   a harness of the core's headers, 0.993x on two (9 rounds): the tests left out were mostly
+//   those that sphere_t()'s first early out ends (issue 12).
 // The rays traced differ from these exact ones by the roundings of the hit point, of its offset
-// (02_ray.h offset_ray_origin(), some ulps of the point) and of the direction: far inside
-// pixel_rect()'s two-pixel margin, so a skipped test is one that would find nothing (the images
-// are compared with the one-ray tracer's, bit for bit, tests/tracer/test_packet.py).
+// (02_ray.h offset_ray_origin(), some ulps of the point) and of the direction, and sphere_t()
+// finds a ray's miss by some ulps of the distances: the cone is widened by a millionth of a
+// radian and the cylinder by a millionth of its radius and length, both far inside the
+// two-pixel margin, so a skipped test is one that would find nothing (the images are compared
+// with the one-ray tracer's, bit for bit, tests/tracer/test_packet.py). Where the polygon
+// reaches more than a million times the light's distance from the sphere (a cone that grazes
+// the plane), every pixel, so that the polygon's points stay within that reach.
 inline PixelRect mirrored_rect(const Camera &cam, const Plane &pl, const Sphere &sp) {
     const Vec3 &n = pl.normal; // unit length
-    return pixel_rect(cam, sphere_box(sp.center - n * (2 * dot(sp.center - pl.point, n)),
-                                      sp.radius));
+    return sphere_rect(cam, sp.center - n * (2 * dot(sp.center - pl.point, n)), sp.radius);
 }
 
 inline PixelRect shadow_rect(const Camera &cam, const Plane &pl, const Light &light,
                              const Sphere &sp) {
-    // Heights above the plane are measured on the light's side; a corner counts as below a point
-    // light only with a millionth of the light's height to spare, so that no rounding of these
-    // heights lets a corner at or above it through.
+    constexpr int sides = 16;       // the polygon's corners lie 2% outside the cone's circle
+    constexpr double spare = 1e-6;  // radians, or of the cylinder's radius and length (above)
+    constexpr double reach = 1e6;   // of the light's distance (above)
+    const Vec3 &n = pl.normal;
     const bool point = light.type == Light::Type::point;
-    const Vec3 toward = point ? light.position - pl.point : -light.direction;
-    const double side = dot(toward, pl.normal);
-    if (!(side != 0)) return PixelRect{}; // the light in (or along) the plane: no shadow to bound
-    const Vec3 n = side > 0 ? pl.normal : -pl.normal;
-    const double light_h = std::fabs(side); // a point light's height; for a distant one d.n
-    const AABB box = sphere_box(sp.center, sp.radius);
-    AABB shadow;
-    for (int k = 0; k < 8; ++k) { // corner k: the max on axis a where bit a of k is set
-        const Vec3 x{k & 1 ? box.max.x : box.min.x, k & 2 ? box.max.y : box.min.y,
-                     k & 4 ? box.max.z : box.min.z};
-        const double h = dot(x - pl.point, n);
-        if (point) {
-            if (!(h < light_h * (1 - 1e-6))) return PixelRect{};
-            shadow.extend(light.position + (x - light.position) * (light_h / (light_h - h)));
-        } else {
-            shadow.extend(x - toward * (h / light_h));
-        }
+    Vec3 axis;          // from the light through the sphere
+    double spread = 0;  // a corner's distance from the axis: per unit along it, or for a prism
+    double far = 0;     // how far from the sphere's centre a corner may lie
+    if (point) {
+        const Vec3 w = sp.center - light.position;
+        const double distance = length(w);
+        if (!(distance > sp.radius * (1 + spare))) return PixelRect{}; // the light in the ball
+        axis = w / distance;
+        const double half = std::asin(sp.radius / distance) + spare;
+        spread = std::tan(half) / std::cos(pi / sides);
+        far = reach * distance;
+    } else {
+        axis = light.direction;
+        const double travel = std::fabs(dot(pl.point - sp.center, n) / dot(axis, n));
+        spread = (sp.radius + spare * (sp.radius + travel)) / std::cos(pi / sides);
+        far = reach * (sp.radius + travel);
     }
-    return pixel_rect(cam, shadow);
+    // Two unit vectors perpendicular to the axis and to each other.
+    const Vec3 e1 = normalize(cross(axis, std::fabs(axis.x) < 0.6 ? Vec3{1, 0, 0} : Vec3{0, 1, 0}));
+    const Vec3 e2 = cross(axis, e1);
+    Vec3 corners[sides];
+    for (int k = 0; k < sides; ++k) {
+        const double angle = 2 * pi * k / sides;
+        const Vec3 out = (e1 * std::cos(angle) + e2 * std::sin(angle)) * spread;
+        const Vec3 from = point ? light.position : sp.center + out;
+        const Vec3 along = point ? axis + out : axis;
+        const double t = dot(pl.point - from, n) / dot(along, n);
+        if (!(point ? t > 0 : std::isfinite(t))) return PixelRect{}; // an edge misses the plane
+        corners[k] = from + along * t;
+        if (!(length(corners[k] - sp.center) < far)) return PixelRect{};
+    }
+    return points_rect(cam, corners, sides);
 }
 
 // Whether sphere `b` can block no shadow ray that leaves sphere `a` for the light: for a point
@@ -506,7 +580,7 @@ struct PacketCulling {
         const Camera &cam = scene.camera;
         for (int s = 0; s < spheres; ++s) {
             const Sphere &sp = scene.spheres[size_t(s)];
-            seen.push_back(pixel_rect(cam, sphere_box(sp.center, sp.radius)));
+            seen.push_back(sphere_rect(cam, sp.center, sp.radius));
         }
         for (int k = 0; k < planes; ++k)
             for (int s = 0; s < spheres; ++s)
@@ -1186,8 +1260,8 @@ inline void render_tile_packets(const PacketCulling &culling, const Scene &scene
         Vec3L across[most];
         for (int p = 0, i = x0; i < x1 && p < most; ++p, i += rays_per_packet)
             across[p] = primary_across(cam, i);
-        // The spheres some primary ray of this tile may meet (within the image rectangle of
-        // the sphere's bounding box, pixel_rect()); the others' tests are skipped, and per
+        // The spheres some primary ray of this tile may meet (within the sphere's image
+        // rectangle, sphere_rect()); the others' tests are skipped, and per
         // packet those of the rest it cannot meet (the first 32 spheres: a bit each). Ex 25's
         // sky and floor packets skip all three spheres: 1.03x to 1.07x on one thread, 1.03x to
         // 1.05x on two (paired A/B, issue 12). The same for the floor's reflections and shadow
