@@ -395,6 +395,28 @@ def mirrored_sphere(i: int, j: int, fifths: float, camera: dict = FLOOR_CAMERA) 
     return sphere(centre, fifths * fifth * float(np.linalg.norm(image - eye)))
 
 
+def mirror_floor(camera: dict, ball: dict) -> dict:
+    """A mirror for a floor, seen by `camera` with one level of reflection, and a ball that
+    glows (ambient 1)."""
+    return scene_dict(
+        camera=camera,
+        render={"max_depth": 2},
+        materials={"m": material(ambient=1.0), "mirror": material(reflectivity=1.0)},
+        objects=[plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], "mirror"), ball],
+    )
+
+
+def shadowed_floor(camera: dict, light: dict, centre: np.ndarray, radius: float) -> dict:
+    """A diffuse floor seen by `camera`, lit by `light` (no other terms), and a black ball."""
+    return scene_dict(
+        camera=camera,
+        render={"max_depth": 1},
+        materials={"m": material(), "floor": material(diffuse=1.0)},
+        lights=[light],
+        objects=[plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], "floor"), sphere(list(centre), radius)],
+    )
+
+
 @pytest.mark.parametrize("pixel", FLOOR_PIXELS)
 @pytest.mark.parametrize("stereo", [False, True])
 def test_a_reflection_seen_by_one_pixel(pixel, stereo):
@@ -402,16 +424,7 @@ def test_a_reflection_seen_by_one_pixel(pixel, stereo):
     camera = dict(FLOOR_CAMERA)
     if stereo:
         camera["stereo"] = {"eye_separation": 1.0, "convergence": 4.0, "layout": "side_by_side"}
-    data = scene_dict(
-        camera=camera,
-        render={"max_depth": 2},
-        materials={"m": material(ambient=1.0), "mirror": material(reflectivity=1.0)},
-        objects=[
-            plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], "mirror"),
-            mirrored_sphere(i, j, 1, camera),
-        ],
-    )
-    a = packets_agree(tracer.load_scene(data))
+    a = packets_agree(tracer.load_scene(mirror_floor(camera, mirrored_sphere(i, j, 1, camera))))
     assert a.image[j, i].sum() > 0  # the reflection, where the mirror image was put (left eye)
 
 
@@ -423,13 +436,7 @@ def test_a_shadow_seen_by_one_pixel(pixel, light):
     position = np.array([3.0, 5.0, 2.0])
     centre = p + 0.5 * (position - p)  # halfway to the light, on pixel (i, j)'s shadow ray
     radius = fifth * float(np.linalg.norm(centre - eye))
-    data = scene_dict(
-        camera=FLOOR_CAMERA,
-        render={"max_depth": 1},
-        materials={"m": material(), "floor": material(diffuse=1.0)},
-        lights=[light_at(light, position, p)],
-        objects=[plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], "floor"), sphere(list(centre), radius)],
-    )
+    data = shadowed_floor(FLOOR_CAMERA, light_at(light, position, p), centre, radius)
     a = packets_agree(tracer.load_scene(data))
     assert a.image[j, i].sum() == 0  # in the shadow
     assert (a.image.sum(axis=-1) > 0).mean() > 0.9  # and the floor around it lit
@@ -563,12 +570,7 @@ def test_the_edge_of_a_large_spheres_reflection_in_one_pixel(pixel, toward, beyo
     for column, row in (pixel, beyond):  # the primary rays meet the floor, not the ball
         e, dk, _ = pixel_ray(column, row, EDGE_FLOOR_CAMERA)
         assert not meets(e, dk, centre, radius)
-    data = scene_dict(
-        camera=EDGE_FLOOR_CAMERA,
-        render={"max_depth": 2},
-        materials={"m": material(ambient=1.0), "mirror": material(reflectivity=1.0)},
-        objects=[plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], "mirror"), sphere(list(centre), radius)],
-    )
+    data = mirror_floor(EDGE_FLOOR_CAMERA, sphere(list(centre), radius))
     a = packets_agree(tracer.load_scene(data))
     assert a.image[j, i].sum() > 0
     assert a.image[beyond[1], beyond[0]].sum() == 0
@@ -591,13 +593,7 @@ def test_the_edge_of_a_large_spheres_shadow_in_one_pixel(pixel, toward, beyond, 
     for column, row in (pixel, beyond):  # the primary rays meet the floor, not the ball
         e, dk, _ = pixel_ray(column, row, EDGE_FLOOR_CAMERA)
         assert not meets(e, dk, centre, radius)
-    data = scene_dict(
-        camera=EDGE_FLOOR_CAMERA,
-        render={"max_depth": 1},
-        materials={"m": material(), "floor": material(diffuse=1.0)},
-        lights=[light_at(light, position, p)],
-        objects=[plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], "floor"), sphere(list(centre), radius)],
-    )
+    data = shadowed_floor(EDGE_FLOOR_CAMERA, light_at(light, position, p), centre, radius)
     a = packets_agree(tracer.load_scene(data))
     assert a.image[j, i].sum() == 0  # in the shadow
     assert a.image[beyond[1], beyond[0]].sum() > 0  # and the pixel beyond it lit
