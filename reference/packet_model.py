@@ -27,7 +27,9 @@ where in the source the instructions came from: by step (the line of trace_level
 render_tile_packets() each was inlined from, read from the core's inlining chains by addr2line)
 and by the innermost function. ``--mnemonics N`` lists the N most executed mnemonics a packet,
 how many of each on 512-bit registers, and the operands a packet that name the stack (spills,
-reloads, locals kept in memory): traffic the model leaves out.
+reloads, locals kept in memory): traffic the model leaves out. ``--listing FILE`` writes every
+executed instruction of the packets to FILE with its innermost function, line and step, to read
+what the tables only count.
 
 Needs gdb, binutils (nm, objdump, addr2line) and llvm-mca-19 (Debian: ``apt-get install gdb
 binutils llvm-19``), which ``make`` does not install, and a core with symbols and line tables:
@@ -387,6 +389,25 @@ def where_time_goes(lines: list[str], places: dict[int, list[tuple[str, str]]], 
     return "\n".join(out)
 
 
+def listing(packets: list[list[str]], places: dict[int, list[tuple[str, str]]]) -> str:
+    """The traced packets instruction by instruction, in the order executed: each with the
+    innermost function and line it came from and its step (step_of()), a `# packet k` line
+    before each packet. What where_time_goes() counts, to be read: which values a packet spills
+    and reloads, what a branch or a dispatch costs where it runs."""
+    out = []
+    for k, packet in enumerate(packets):
+        out.append(f"# packet {k}")
+        for line in packet:
+            if "\t" not in line:
+                continue
+            offset, text = line.split("\t", 1)
+            chain = places.get(int(offset, 16), [])
+            inner = f"{chain[0][0]} {Path(chain[0][1]).name}" if chain else "?"
+            step = step_of(chain)
+            out.append(f"{text:<56} {inner:<36} {Path(step).name if chain else step}")
+    return "\n".join(out) + "\n"
+
+
 # An operand that names the stack: a spill, its reload, or a local kept in memory.
 STACK_OPERAND = re.compile(r"\(%r[sb]p\)|\(%r[sb]p,")
 
@@ -464,6 +485,11 @@ def main(argv: list[str] | None = None) -> int:
         "and the N innermost functions the most instructions came from",
     )  # fmt: skip
     parser.add_argument(
+        "--listing", type=Path, metavar="FILE",
+        help="also write every executed instruction of the packets, with its source line and "
+        "step, to FILE",
+    )  # fmt: skip
+    parser.add_argument(
         "--mnemonics", type=int, default=0, metavar="N",
         help="also list the N most executed mnemonics a packet (how many on 512-bit registers) "
         "and the operands a packet that name the stack",
@@ -491,9 +517,17 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{so}: {n} packets of {core_module.rays_per_packet} rays from pixel "
               f"{tuple(args.pixel)}: {len(lines) / n:.0f} instructions a packet, "
               f"{arithmetic / n:.0f} of them vector add/sub/mul/div/sqrt")  # fmt: skip
-        if args.where > 0:
+        if args.where > 0 or args.listing is not None:
             offsets = [int(line.split("\t", 1)[0], 16) for line in lines if "\t" in line]
-            print(where_time_goes(lines, source_places(so, offsets), args.where, source_text))
+            places = source_places(so, offsets)
+            if args.where > 0:
+                print(where_time_goes(lines, places, args.where, source_text))
+            if args.listing is not None:
+                from tracer.image import atomic_path
+
+                with atomic_path(args.listing) as tmp:
+                    tmp.write_text(listing(packets, places))
+                print(f"{args.listing}: {len(lines)} instructions, {n} packets")
         if args.mnemonics > 0:
             print(mnemonic_mix(lines, n, args.mnemonics))
         for cpu in args.cpu or ["znver4", "sapphirerapids"]:

@@ -7,6 +7,7 @@ from __future__ import annotations
 import pytest
 
 from reference.packet_model import (
+    listing,
     mnemonic_mix,
     packet_index,
     packet_store,
@@ -227,6 +228,26 @@ def test_where_time_goes_counts_instructions_and_vector_arithmetic_per_step() ->
     ]
     assert ["1", "25%", "0", "?"] in [r.split() for r in step_rows]
     assert "sphere_t" in text.split("function")[1]  # the innermost function's table
+
+
+def test_listing_names_each_instructions_function_line_and_step() -> None:
+    places = parse_addr2line(ADDR2LINE)
+    packets = [
+        ["27733\tvmulpd %zmm1,%zmm2,%zmm3", "26f35\tvmovapd %zmm1,(%rsp)"],
+        ["99999\tnop", "#packet"],  # no line tables for it; a marker is not an instruction
+    ]
+    rows = listing(packets, places).splitlines()
+    assert rows[0] == "# packet 0" and rows[3] == "# packet 1" and len(rows) == 5
+    assert rows[1].split() == [
+        "vmulpd",
+        "%zmm1,%zmm2,%zmm3",
+        "sphere_t",
+        "12_packet.h:146",
+        "12_packet.h:777",
+        "trace_level",
+    ]  # the innermost function and line, then the step
+    assert rows[2].split()[-2:] == ["12_packet.h:142", "render_tile_packets"]
+    assert rows[4].split() == ["nop", "?", "?"]
 
 
 def test_source_text_reads_the_line_at_a_place(tmp_path) -> None:
