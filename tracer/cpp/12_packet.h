@@ -189,6 +189,7 @@ struct Vec3L {
         Lanes inv = 1 / s;
         return {x * inv, y * inv, z * inv};
     }
+    void set(int k, const Vec3 &v) { x[k] = v.x, y[k] = v.y, z[k] = v.z; } // lane k
 };
 inline Vec3L splat(const Vec3 &v) { return {splat(v.x), splat(v.y), splat(v.z)}; }
 inline Lanes dot(const Vec3L &a, const Vec3L &b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
@@ -248,6 +249,7 @@ inline void add_where(LaneMask m, ColorL &color, const ColorL &add) {
 
 struct RayL {
     Vec3L o, d;
+    void set(int k, const Ray &r) { o.set(k, r.o), d.set(k, r.d); } // lane k
 };
 
 // 05_sphere.h sphere_t(), per lane: the nearest root in (0, max), or infinity. Most packets
@@ -1318,8 +1320,7 @@ inline void render_tile_packets(const PacketCulling &culling, const Scene &scene
     auto flush = [&] {
         const LaneMask active = first_lanes(n);
         for (int k = n; k < rays_per_packet; ++k) // idle lanes: any harmless ray, masked off
-            packet.o.x[k] = packet.o.y[k] = packet.o.z[k] = 0,
-            packet.d.x[k] = packet.d.y[k] = 0, packet.d.z[k] = 1;
+            packet.set(k, Ray{{0, 0, 0}, {0, 0, 1}});
         const PrimaryPixels samples{tile, span};
         ColorL c = trace(scene, packet, active, counts, &culling, &samples);
         for (int k = 0; k < n; ++k) sums[size_t(pixel[k])] += Color{c.r[k], c.g[k], c.b[k]};
@@ -1330,8 +1331,7 @@ inline void render_tile_packets(const PacketCulling &culling, const Scene &scene
             for_each_sample(scene, i, j, [&](double sx, double sy, Rng &) {
                 Ray r = cam.primary_ray(sx, sy);
                 ++counts.primary;
-                packet.o.x[n] = r.o.x, packet.o.y[n] = r.o.y, packet.o.z[n] = r.o.z;
-                packet.d.x[n] = r.d.x, packet.d.y[n] = r.d.y, packet.d.z[n] = r.d.z;
+                packet.set(n, r);
                 pixel[n] = (j - y0) * tile_w + (i - x0);
                 if (n == 0) span = {sx, sx, sy, sy};
                 else

@@ -471,11 +471,8 @@ NB_MODULE(_core, m) {
                 if (!rt::packets_serve(s))
                     throw std::invalid_argument("packets serve scenes of spheres and planes only");
                 rt::RayL rays{};
-                for (size_t k = 0; k < n; ++k) {
-                    const rt::Vec3 o = vec(origins[k]), d = rt::normalize(vec(directions[k]));
-                    rays.o.x[k] = o.x, rays.o.y[k] = o.y, rays.o.z[k] = o.z;
-                    rays.d.x[k] = d.x, rays.d.y[k] = d.y, rays.d.z[k] = d.z;
-                }
+                for (size_t k = 0; k < n; ++k)
+                    rays.set(int(k), {vec(origins[k]), rt::normalize(vec(directions[k]))});
                 rt::RayCounts counts;
                 const rt::ColorL c =
                     rt::trace(s, rays, rt::first_lanes(int(n)), counts, nullptr, nullptr);
@@ -579,10 +576,7 @@ NB_MODULE(_core, m) {
            std::array<Triple, rt::rays_per_packet> toward) {
             auto lanes = [](const std::array<Triple, rt::rays_per_packet> &v) {
                 rt::Vec3L l;
-                for (int k = 0; k < rt::rays_per_packet; ++k) {
-                    const Triple &t = v[size_t(k)];
-                    l.x[k] = t[0], l.y[k] = t[1], l.z[k] = t[2];
-                }
+                for (int k = 0; k < rt::rays_per_packet; ++k) l.set(k, vec(v[size_t(k)]));
                 return l;
             };
             const rt::Vec3L pl = lanes(p), el = lanes(p_error), nl = lanes(normal);
