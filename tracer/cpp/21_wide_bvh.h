@@ -456,9 +456,8 @@ struct CornerLanes {
 // in best_triangle (the mesh's own, or its place in leaf order: see block_hits()).
 template <class Vertex, class Triangle>
 inline bool candidates_hit(M4 candidates, unsigned real, Vertex vertex, Triangle triangle,
-                           const Mesh &mesh, const WatertightRay &wr, Interval &range,
-                           TriangleHit &best, int &best_triangle, uint64_t &primitive_tests,
-                           bool any) {
+                           const WatertightRay &wr, Interval &range, TriangleHit &best,
+                           int &best_triangle, uint64_t &primitive_tests, bool any) {
     const unsigned picked = lane_bits4(candidates);
     primitive_tests += uint64_t(__builtin_popcount(real));
     bool found = false;
@@ -491,7 +490,7 @@ inline bool block_hits(const TriangleBlock &block, const Mesh &mesh, const Water
             return {block.p[k][0][l], block.p[k][1][l], block.p[k][2][l]};
         },
         [&](int l) { return in_leaf_order ? block.leaf[l] : mesh.order[size_t(block.leaf[l])]; },
-        mesh, wr, range, best, best_triangle, primitive_tests, any);
+        wr, range, best, best_triangle, primitive_tests, any);
 }
 
 // An IndexBlock's triangles.
@@ -511,7 +510,7 @@ inline bool block_hits(const IndexBlock &block, const Mesh &mesh, const Watertig
         [&](int l) {
             return in_leaf_order ? block.first + l : mesh.order[size_t(block.first + l)];
         },
-        mesh, wr, range, best, best_triangle, primitive_tests, any);
+        wr, range, best, best_triangle, primitive_tests, any);
 }
 
 // slab_test() (14_box.h) for the eight children of a node: the same operations, lane by lane
