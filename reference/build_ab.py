@@ -201,16 +201,20 @@ def build_variant(variant: Variant, log: Callable[[str], None] = print) -> Path:
     folder = ROOT / "build" / "ab" / variant.name
     options = [f"-DCMAKE_CXX_COMPILER={compiler}", f"-DCMAKE_CXX_FLAGS={variant.flags}"]
     options += shlex.split(variant.cmake)
+    source = _source(variant, folder)
+    # The source folder is part of the configuration: CMake refuses a build folder configured
+    # from another one (a name used first with rev=, then for this checkout).
+    configuration = [*options, f"source={source}"]
     configured = folder / "build" / "rtlab-options.json"
-    if configured.exists() and json.loads(configured.read_text()) != options:
+    if configured.exists() and json.loads(configured.read_text()) != configuration:
         shutil.rmtree(folder / "build")
     log(f"building {variant.name} ({variant.describe()}) in {folder / 'build'}")
     start = time.perf_counter()
     try:
-        made = build_core(folder / "build", *options, source=_source(variant, folder))
+        made = build_core(folder / "build", *options, source=source)
     except BuildError as error:
         raise ABError(f"variant {variant.name} ({variant.describe()}): {error}") from error
-    configured.write_text(json.dumps(options))
+    configured.write_text(json.dumps(configuration))
     for line in made.warnings:
         log(f"  {variant.name}: {line}")
     log(f"built {variant.name} in {time.perf_counter() - start:.0f} s")

@@ -227,7 +227,11 @@ def test_a_commit_built_afresh_against_the_installed_core(tmp_path: Path) -> Non
         assert other["flags"] == "-mtune=generic" and other["rev"] == "HEAD"
         assert other["compiler"].startswith("Debian Clang")
     configured = ROOT / "build" / "ab" / "head" / "build" / "rtlab-options.json"
-    assert "-DCMAKE_CXX_FLAGS=-mtune=generic" in json.loads(configured.read_text())
+    configuration = json.loads(configured.read_text())
+    assert "-DCMAKE_CXX_FLAGS=-mtune=generic" in configuration
+    # The exported source is part of it, so that the same name later given to this checkout's
+    # files is configured afresh (CMake refuses a build folder made from another source).
+    assert f"source={ROOT / 'build' / 'ab' / 'head' / 'src'}" in configuration
 
 
 def test_a_worker_that_dies_is_named_with_its_error(tmp_path: Path) -> None:
