@@ -1227,9 +1227,9 @@ struct WideSearch {
 // WatertightRay(ray) (15_triangle.h), statement for statement, but for its Sz = 1 / d[kz], taken
 // from the slab test's 1/d: the same division, so the same bits, done once where each search's
 // set-up did it twice. The set-up of a search lies on its first step's path, and the bunny's 2M
-// incoherent rays took 1.017x less time on one Xeon thread, 1.016x on two (build_ab, 7 rounds,
-// the same hits; issue 12); doing the other five divisions as one 256-bit division instead of
-// two 128-bit and one scalar took 1.06x more.
+// incoherent rays ran 1.017x faster on one Xeon thread, 1.016x on two (build_ab, 7 rounds, the
+// same hits; issue 12); doing the other five divisions as one 256-bit division instead of two
+// 128-bit and one scalar made them 1.06x slower.
 inline WatertightRay watertight_ray(const Ray &ray, const SlabRay &sr) {
     WatertightRay w;
     w.o = ray.o, w.d = ray.d;
