@@ -81,6 +81,9 @@ struct Mesh : Object {
     // Where one mesh holds the flat triangles of several scene objects: each face's object and
     // material (empty: all are this mesh's own).
     std::vector<int> triangle_object, triangle_material;
+    int object_of(int t) const { // triangle t's object
+        return triangle_object.empty() ? object : triangle_object[size_t(t)];
+    }
     // The faster search (none until one is built for this mesh), and whether to use it.
     std::shared_ptr<const MeshAccelerator> accelerator;
     bool packets = true;
@@ -346,7 +349,7 @@ struct Mesh : Object {
         if (!normals.empty()) // Gouraud-style: the vertex normals, interpolated
             hit.N = smooth_normal(th, normals[size_t(tri[0])], normals[size_t(tri[1])],
                                   normals[size_t(tri[2])], hit.Ng);
-        hit.object = triangle_object.empty() ? object : triangle_object[size_t(t)];
+        hit.object = object_of(t);
         hit.material = triangle_material.empty() ? material : triangle_material[size_t(t)];
     }
 

@@ -1508,8 +1508,7 @@ inline void interleaved_searches(const Mesh &mesh, size_t start, size_t end, Mak
         }
         const int32_t t = Search::in_leaf_order ? mesh.order[size_t(found)] : found;
         triangle_out[r] = t;
-        object_out[r] =
-            mesh.triangle_object.empty() ? mesh.object : mesh.triangle_object[size_t(t)];
+        object_out[r] = mesh.object_of(t);
     }
 }
 
@@ -1601,8 +1600,7 @@ inline void closest_mesh_hits(const Scene &scene, const double *origins,
                     int t = -1;
                     if (mesh->search(ray, range, th, t, counts, false)) {
                         range.max = th.t, triangle = t;
-                        object = mesh->triangle_object.empty() ? mesh->object
-                                                               : mesh->triangle_object[size_t(t)];
+                        object = mesh->object_of(t);
                     }
                 }
                 t_out[i] = object >= 0 ? range.max : infinity;
