@@ -1224,25 +1224,6 @@ struct WideSearch {
     }
 };
 
-// WatertightRay(ray) (15_triangle.h), statement for statement, but for its Sz = 1 / d[kz], taken
-// from the slab test's 1/d: the same division, so the same bits, done once where each search's
-// set-up did it twice. The set-up of a search lies on its first step's path, and the bunny's 2M
-// incoherent rays ran 1.017x faster on one Xeon thread, 1.016x on two (build_ab, 7 rounds, the
-// same hits; issue 12); doing the other five divisions as one 256-bit division instead of two
-// 128-bit and one scalar made them 1.06x slower.
-inline WatertightRay watertight_ray(const Ray &ray, const SlabRay &sr) {
-    WatertightRay w;
-    w.o = ray.o, w.d = ray.d;
-    const Vec3 a = abs(ray.d);
-    w.kz = a.x > a.y ? (a.x > a.z ? 0 : 2) : (a.y > a.z ? 1 : 2);
-    w.kx = (w.kz + 1) % 3;
-    w.ky = (w.kx + 1) % 3;
-    w.Sx = -ray.d[w.kx] / ray.d[w.kz];
-    w.Sy = -ray.d[w.ky] / ray.d[w.kz];
-    w.Sz = sr.inv_d[w.kz];
-    return w;
-}
-
 // One ray's search of the eight-wide tree, as WideSearch: the children a node's ray meets
 // ordered by entry distance (search keys, sort_descending()), the nearest taken next without
 // going through the stack, the others pushed farthest first. A step ends only where the next
@@ -1255,7 +1236,11 @@ template <class Block, bool by_leaf = false> struct Search8 {
     const WideBVH &bvh;
     const Block *blocks;
     const Mesh &mesh;
-    const SlabRay sr; // (before wr, which takes its 1/d[kz])
+    // sr before wr, which takes its Sz = 1/d[kz] from sr's 1/d: one division fewer in a ray's
+    // set-up, which lies on its first step's path; the bunny's 2M incoherent rays ran 1.017x
+    // faster on one Xeon thread, 1.016x on two (build_ab, 7 rounds, the same hits; doing the
+    // other five divisions as one 256-bit division made them 1.06x slower; issue 12).
+    const SlabRay sr;
     const WatertightRay wr;
     Interval range;
     const bool any;
@@ -1275,7 +1260,7 @@ template <class Block, bool by_leaf = false> struct Search8 {
 
     Search8(const WideBVH &bvh, const Block *blocks, const Mesh &mesh, const Ray &ray,
             Interval range, bool any)
-        : bvh(bvh), blocks(blocks), mesh(mesh), sr(ray), wr(watertight_ray(ray, sr)),
+        : bvh(bvh), blocks(blocks), mesh(mesh), sr(ray), wr(ray, sr.inv_d),
           range(range), any(any), fr(sr, bvh.plane_bound, range) {
         set_range_max();
         stack[top++] = 0; // the root, entered at t >= 0
