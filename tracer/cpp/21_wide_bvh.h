@@ -1154,7 +1154,7 @@ inline void prefetch_lines(const void *p, size_t bytes) {
 // of rays can take turns (closest_mesh_hits()): while one ray waits for its next node to come
 // from memory, the others work.
 struct WideSearch {
-    static constexpr bool in_leaf_order = false; // (see Search8)
+    static constexpr bool in_leaf_order = false; // what block_hits() reports (see Search8)
     struct Entry {
         int32_t child; // as WideNode::child
         double t_near;
@@ -1193,7 +1193,8 @@ struct WideSearch {
         for (int b = first_block, more = 1; more; ++b) {
             const TriangleBlock &block = bvh.blocks[size_t(b)];
             more = block.more;
-            if (block_hits(block, mesh, wr, range, best, best_triangle, primitive_tests, any)) {
+            if (block_hits(block, mesh, wr, range, best, best_triangle, primitive_tests, any,
+                           in_leaf_order)) {
                 found = true;
                 if (any) return top = 0, false;
             }
